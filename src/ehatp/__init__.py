@@ -1,0 +1,40 @@
+"""ehatp: the Epistemic Human-Aware Task Planner.
+
+>>> import ehatp
+>>> problem = ehatp.load("examples/cubes/p2.toml")      # doctest: +SKIP
+>>> result = ehatp.solve(problem)                       # doctest: +SKIP
+>>> result.policy.cost, result.stats["distinct"]        # doctest: +SKIP
+>>> ehatp.validate(problem, result.policy)              # doctest: +SKIP
+"""
+
+from .errors import EhatpError, InputError
+from .model.domain import (
+    HIDDEN,
+    INFERABLE,
+    AgentModel,
+    Domain,
+    DomainError,
+    for_each,
+    observable,
+    when,
+)
+from .model.formula import FALSE, TRUE, Var, eq, exists, forall
+from .model.problem import BeliefWorld, Costs, Limits, Options, Problem, load
+from .search.planner import Result, solve
+from .search.policy import Policy
+
+__version__ = "0.1.0"
+
+
+def validate(problem: Problem, policy: Policy) -> "check.Report":  # noqa: F821
+    """Check ``policy`` against ``problem`` with the independent validator."""
+    from .check.validator import validate as _validate
+
+    return _validate(problem, policy)
+
+
+__all__ = [
+    "FALSE", "HIDDEN", "INFERABLE", "TRUE", "AgentModel", "BeliefWorld", "Costs", "Domain",
+    "DomainError", "EhatpError", "InputError", "Limits", "Options", "Policy", "Problem", "Result",
+    "Var", "eq", "exists", "for_each", "forall", "load", "observable", "solve", "validate", "when",
+]

@@ -1,0 +1,105 @@
+"""Cube organization (the paper's case study, Table 1 P1-P6).
+
+Two tables: ``mt`` (robot and boxes) and ``ot``. Only the human moves. The cubes of each table
+must end in one box, different tables in different boxes. Box contents are visible only for
+transparent boxes, from ``mt``; what lies on a table is visible from that table; what an agent
+holds is visible when co-present (the human always knows what it holds itself).
+
+Option ``turn_before_move`` (the K=4 instances): going to a table takes ``turn`` then ``move``,
+and turning away already breaks co-presence; otherwise one ``move`` does both (K=2 instances).
+
+Our modelling choices: the placement rule ``can_put`` and the goal are derived predicates
+(printed by name in asks); ``pick`` names only the cube (the table is where the cube lies).
+"""
+
+from __future__ import annotations
+
+from ..model.domain import Domain, for_each, observable
+from ..model.formula import Var, eq, exists, forall
+
+R, H = "R", "H"
+MT, OT = "mt", "ot"
+
+
+def make_domain(turn_before_move: bool = False) -> Domain:
+    d = Domain("cubes-turn" if turn_before_move else "cubes", robot=R, human=H, doc=__doc__ or "")
+    Table, Box, Cube = d.type("table"), d.type("box"), d.type("cube")
+    d.constant(MT, Table)
+    d.constant(OT, Table)
+    a = Var("a", "agent")
+    t, t0, t1, t2 = (Var(n, Table) for n in ("t", "t0", "t1", "t2"))
+    b, b2 = Var("b", Box), Var("b2", Box)
+    c, c2 = Var("c", Cube), Var("c2", Cube)
+
+    # static facts
+    origin = d.predicate("origin", c, t)
+    transparent = d.predicate("transparent", b)
+    # fluents
+    at = d.predicate("at", a, t)
+    facing = d.predicate("facing", a, t)
+    copresent = exists(t, at(R, t) & at(H, t) & facing(R, t) & facing(H, t))
+    d.copresence = copresent
+    on = d.predicate("on", c, t, observability=observable(at(H, t)))
+    box_visible = observable(at(H, MT) & transparent(b))
+    inside = d.predicate("in", c, b, observability=box_visible)
+    empty = d.predicate("empty", b, observability=box_visible)
+    own_or_seen = observable(eq(a, H) | copresent)
+    holding = d.predicate("holding", a, c, observability=own_or_seen)
+    handempty = d.predicate("handempty", a, observability=own_or_seen)
+
+    # placement rule: cubes of one table in one box, different tables in different boxes
+    mate_in = d.derived("mate_in", [c, b], exists([c2, t], inside(c2, b) & origin(c2, t)
+                                                  & origin(c, t)))
+    can_put = d.derived("can_put", [c, b], forall(b2, empty(b2)) | mate_in(c, b)
+                        | (~exists(b2, mate_in(c, b2)) & empty(b)))
+    goal = d.derived("organized", [], forall(c, exists(b, inside(c, b))) & forall(
+        [c, c2, b], (inside(c, b) & inside(c2, b)) >> exists(t, origin(c, t) & origin(c2, t))))
+
+    # -- robot: picks cubes on mt and boxes them --
+    rm = d.robot
+    r_pick = rm.action("pick", c, pre=on(c, MT) & handempty(R),
+                       effects=[holding(R, c), ~on(c, MT), ~handempty(R)])
+    r_place = rm.action("place", c, b, pre=holding(R, c) & at(R, MT) & can_put(c, b),
+                        effects=[inside(c, b), ~empty(b), ~holding(R, c), handempty(R)])
+    r_org = rm.task("organize", done=goal())
+    r_away = rm.task("put_away", c)
+    rm.method(r_org, "near", params=[c], pre=on(c, MT) & handempty(R),
+              subtasks=[r_pick(c), r_away(c), r_org()])
+    rm.method(r_away, "box", params=[b], pre=holding(R, c) & can_put(c, b),
+              subtasks=[r_place(c, b)])
+
+    # -- human: fetches cubes from other tables too --
+    hm = d.human
+    h_pick = hm.action("pick", c, pre=exists(t, at(H, t) & on(c, t)) & handempty(H),
+                       effects=[holding(H, c), ~handempty(H), for_each(t, ~on(c, t))])
+    h_place = hm.action("place", c, b, pre=holding(H, c) & at(H, MT) & can_put(c, b),
+                        effects=[inside(c, b), ~empty(b), ~holding(H, c), handempty(H)])
+    if turn_before_move:
+        turn = hm.action("turn", t1, t2, pre=facing(H, t1) & ~eq(t1, t2),
+                         effects=[facing(H, t2), ~facing(H, t1)])
+        move = hm.action("move", t1, t2, pre=at(H, t1) & facing(H, t2) & ~eq(t1, t2),
+                         effects=[at(H, t2), ~at(H, t1)])
+    else:
+        move = hm.action("move", t1, t2, pre=at(H, t1) & facing(H, t1) & ~eq(t1, t2),
+                         effects=[at(H, t2), facing(H, t2), ~at(H, t1), ~facing(H, t1)])
+
+    def go(src: Var | str, dst: Var | str) -> list:
+        return ([turn(src, dst)] if turn_before_move else []) + [move(src, dst)]
+
+    h_org = hm.task("organize", done=goal())
+    h_away = hm.task("put_away", c)
+    fetch = hm.task("fetch", c, t)
+    hm.method(h_org, "near", params=[c, t], pre=at(H, t) & on(c, t) & handempty(H),
+              subtasks=[h_pick(c), h_away(c), h_org()])
+    hm.method(h_org, "far", params=[c, t], pre=on(c, t) & ~at(H, t) & handempty(H),
+              subtasks=[fetch(c, t), h_away(c), h_org()])
+    hm.method(fetch, "go", params=[t0], pre=at(H, t0) & ~eq(t0, t),
+              subtasks=[*go(t0, t), h_pick(c)])
+    hm.method(h_away, "box", params=[b], pre=holding(H, c) & at(H, MT) & can_put(c, b),
+              subtasks=[h_place(c, b)])
+    hm.method(h_away, "carry", params=[t0], pre=holding(H, c) & at(H, t0) & ~eq(t0, MT),
+              subtasks=[*go(t0, MT), h_away(c)])
+    return d
+
+
+domain = make_domain()

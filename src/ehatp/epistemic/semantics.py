@@ -1,0 +1,340 @@
+"""The transition rules of ``docs/semantics.md``: who may do what, and what the human then
+believes.
+
+:class:`Semantics` turns an epistemic state into its labelled successors (:class:`Move`):
+robot actions (witnessed, or multiplied into the product of anticipated events while the human
+is away, up to K), robot ``wait`` and ``inform``, human actions (only those applicable in every
+world), ``ask`` and ``pass``. Situation assessment runs on every new state.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import combinations
+
+from ..model.formula import And, Formula, conj, ground_atoms
+from ..model.grounding import FINISH, GOp, Grounded
+from ..model.htn import Agenda, Refiner
+from ..model.problem import Cost
+from .state import HUMAN, ROBOT, EState, World, Worlds, normalize, states_of
+
+ACTION, WAIT, PASS, INFORM, ASK = "action", "wait", "pass", "inform", "ask"
+PASSIVE = (WAIT, PASS)
+DEAD_PASSIVE_RUN = 3
+
+
+@dataclass(frozen=True, slots=True)
+class Move:
+    """One option of the agent to move: an OR choice for the robot, an AND branch for the
+    human. ``child`` is None when the move fails (the human acts on a false belief)."""
+
+    agent: int
+    kind: str
+    label: str
+    cost: Cost
+    child: EState | None
+    op: int = -1
+    atoms: int = 0  # inform: the atoms told
+    failure: str = ""
+
+
+def bits_of(m: int) -> list[int]:
+    out = []
+    i = 0
+    while m:
+        if m & 1:
+            out.append(i)
+        m >>= 1
+        i += 1
+    return out
+
+
+class Semantics:
+    def __init__(self, g: Grounded) -> None:
+        self.g = g
+        p = g.problem
+        self.K = p.K
+        self.costs = p.costs
+        self.options = p.options
+        self.names = (p.domain.robot_name, p.domain.human_name)
+        self.R = Refiner(g.robot, g.task_names)
+        self.H = Refiner(g.human, g.task_names)
+        self.RH = (self.R if g.robot_seen_by_human is g.robot
+                   else Refiner(g.robot_seen_by_human, g.task_names))
+        self._vis: dict[int, int] = {}
+        self._cop: dict[int, bool] = {}
+        self._succ: dict[World, tuple[World, ...]] = {}
+        self._inform: dict[tuple[int, Agenda, Agenda, Worlds], int] = {}
+
+    # -- basics ---------------------------------------------------------------------------
+    def initial(self) -> EState:
+        g = self.g
+        turn = HUMAN if g.problem.starts == "human" else ROBOT
+        worlds = self.assess(g.init, normalize(g.beliefs))
+        return EState(turn, g.init, g.robot_agenda, g.human_agenda, worlds, 0, 0)
+
+    def copresent(self, t: int) -> bool:
+        c = self._cop.get(t)
+        if c is None:
+            c = self._cop[t] = self.g.copresent(t)
+        return c
+
+    def visible(self, t: int) -> int:
+        v = self._vis.get(t)
+        if v is None:
+            v = self._vis[t] = self.g.visible_mask(t)
+        return v
+
+    def assess(self, t: int, worlds: Worlds) -> Worlds:
+        """Situation assessment: keep the worlds that agree with ``t`` on every atom the human
+        now sees; an atom no world agrees on is revised in all of them."""
+        vm = self.visible(t)
+        if not vm:
+            return worlds
+        tv = t & vm
+        keep = [w for w in worlds if w[0] & vm == tv]
+        if keep:
+            return worlds if len(keep) == len(worlds) else tuple(keep)
+        return self.observe(t, worlds, vm)
+
+    def observe(self, t: int, worlds: Worlds, mask: int) -> Worlds:
+        """Learn ``t``'s value of each atom of ``mask``, one atom at a time in index order:
+        filter the worlds on it, or revise it in every world when none agrees."""
+        ws = list(worlds)
+        for i in bits_of(mask):
+            bit = 1 << i
+            tb = t & bit
+            keep = [w for w in ws if w[0] & bit == tb]
+            ws = keep if keep else [((s & ~bit) | tb, a) for s, a in ws]
+        return normalize(ws)
+
+    def robot_op(self, op: int) -> GOp:
+        return self.g.robot.ops[op]
+
+    def anticipated_op(self, op: int) -> GOp:
+        """The robot action as the human understands it (M_R^H), else as it really is."""
+        return self.g.robot_seen_by_human.ops.get(op) or self.g.robot.ops[op]
+
+    def successors(self, w: World) -> tuple[World, ...]:
+        """The world itself (noop) and every event the human anticipates of the robot there."""
+        r = self._succ.get(w)
+        if r is None:
+            s, ag = w
+            out = [w]
+            for op, rest in self.RH.refine(ag, s):
+                if op != FINISH:
+                    out.append((self.anticipated_op(op).apply(s), rest))
+            r = self._succ[w] = tuple(out)
+        return r
+
+    def product(self, worlds: Worlds) -> Worlds:
+        return normalize(x for w in worlds for x in self.successors(w))
+
+    # -- goal -----------------------------------------------------------------------------
+    def robot_done(self, es: EState) -> bool:
+        return self.R.refine(es.robot_agenda, es.true)[:1] == ((FINISH, ()),)
+
+    def human_done(self, es: EState) -> bool:
+        states = states_of(es.worlds)
+        full = (1 << len(states)) - 1
+        return any(u.op == FINISH and u.worlds == full
+                   for u in self.H.refine_in_all(es.human_agenda, states))
+
+    def human_believes_robot_done(self, es: EState) -> bool:
+        return all(self.RH.refine(ag, s)[:1] == ((FINISH, ()),) for s, ag in es.worlds)
+
+    def is_goal(self, es: EState) -> bool:
+        return (self.g.goal(es.true) and self.robot_done(es) and self.human_done(es)
+                and self.human_believes_robot_done(es))
+
+    # -- moves ----------------------------------------------------------------------------
+    def moves(self, es: EState) -> list[Move]:
+        return self.robot_moves(es) if es.turn == ROBOT else self.human_moves(es)
+
+    def robot_moves(self, es: EState) -> list[Move]:
+        t, cop = es.true, self.copresent(es.true)
+        out: list[Move] = []
+        can_act = cop or es.k < self.K
+        if can_act:
+            for op, rest in self.R.refine(es.robot_agenda, t):
+                if op != FINISH:
+                    gop = self.robot_op(op)
+                    out.append(Move(ROBOT, ACTION, gop.name, gop.cost,
+                                    self.robot_exec(es, gop, rest, cop), op))
+        out.append(Move(ROBOT, WAIT, "wait", self.costs.wait, self.robot_wait(es, cop)))
+        if cop:
+            mask = self.informing_set(es)
+            if mask:
+                out.append(Move(ROBOT, INFORM, self.inform_label(t, mask), self.costs.inform,
+                                self.inform(es, mask), atoms=mask))
+        return out
+
+    def robot_exec(self, es: EState, op: GOp, rest: Agenda, cop: bool) -> EState:
+        t2 = op.apply(es.true)
+        if cop:
+            new: list[World] = []
+            for s, ag in es.worlds:
+                for o, r in self.RH.refine(ag, s):
+                    if o == op.id:
+                        new.append((self.anticipated_op(o).apply(s), r))
+            if not new:  # the human could not have expected it: revise
+                seen = self.anticipated_op(op.id)
+                new = [(seen.apply(s), rest) for s, _ in es.worlds]
+            inf = (es.true ^ t2) & self.g.inferable_mask
+            if inf:
+                new = [((s & ~inf) | (t2 & inf), a) for s, a in new]
+            worlds, k = normalize(new), es.k
+        else:
+            worlds, k = self.product(es.worlds), es.k + 1
+        worlds = self.assess(t2, worlds)
+        return EState(HUMAN, t2, rest, es.human_agenda, worlds,
+                      0 if self.copresent(t2) else k, 0)
+
+    def robot_wait(self, es: EState, cop: bool) -> EState:
+        worlds, k = es.worlds, es.k
+        if not cop and k < self.K:  # unseen, the wait is one of the events the human imagines
+            worlds, k = self.assess(es.true, self.product(worlds)), k + 1
+        return es._replace(turn=HUMAN, worlds=worlds, k=k, passive=es.passive + 1)
+
+    def human_moves(self, es: EState) -> list[Move]:
+        t, cop = es.true, self.copresent(es.true)
+        states = states_of(es.worlds)
+        full = (1 << len(states)) - 1
+        acts: list[tuple[int, Agenda]] = []
+        asks: dict[str, Formula] = {}
+        for u in self.H.refine_in_all(es.human_agenda, states):
+            if u.worlds == full:
+                if u.op != FINISH:
+                    acts.append((u.op, u.rest))
+            elif cop and u.conds:
+                phi = self.uncertain_part(conj(*u.conds), states)
+                asks.setdefault(self.show(phi), phi)
+        out: list[Move] = []
+        for op, rest in acts:
+            gop = self.g.human.ops[op]
+            out.append(self.human_exec(es, gop, rest))
+        for label, phi in sorted(asks.items()):
+            out.append(Move(HUMAN, ASK, f"ask({label})", self.costs.ask, self.ask(es, phi)))
+        after_wait = es.passive > 0
+        if cop:
+            may_pass = not (after_wait and (acts or (
+                asks and not self.options.human_passes_when_blocked)))
+        else:
+            may_pass = not acts
+        if may_pass:
+            out.append(Move(HUMAN, PASS, "pass", self.costs.pass_,
+                            es._replace(turn=ROBOT, passive=es.passive + 1)))
+        return out
+
+    def human_exec(self, es: EState, op: GOp, rest: Agenda) -> Move:
+        t = es.true
+        if not op.pre(t):
+            false = [self.g.atoms[i] for i in bits_of(self._unmet(op, t, es.worlds[0][0]))]
+            why = f"{self.names[HUMAN]} does {op.name} on a false belief"
+            return Move(HUMAN, ACTION, op.name, op.cost, None, op.id,
+                        failure=why + (f" ({', '.join(false)})" if false else ""))
+        t2 = op.apply(t)
+        inf = (t ^ t2) & self.g.inferable_mask
+        new = []
+        for s, ag in es.worlds:
+            s2 = op.apply(s)
+            new.append(((s2 & ~inf) | (t2 & inf), ag))
+        worlds = self.assess(t2, normalize(new))
+        k = 0 if self.copresent(t2) else es.k
+        return Move(HUMAN, ACTION, op.name, op.cost,
+                    EState(ROBOT, t2, es.robot_agenda, rest, worlds, k, 0), op.id)
+
+    def _unmet(self, op: GOp, t: int, believed: int) -> int:
+        """Atoms of the precondition on which the human's belief differs from the truth."""
+        m = 0
+        for i in ground_atoms(op.pre_f):
+            m |= 1 << i
+        return m & (t ^ believed)
+
+    # -- communication ------------------------------------------------------------------------
+    def uncertain_part(self, phi: Formula, states: tuple[int, ...]) -> Formula:
+        """The conjuncts of ``phi`` whose value differs between the worlds: what the human
+        is actually unsure of."""
+        parts = phi.args if isinstance(phi, And) else (phi,)
+        keep = []
+        for p in parts:
+            fn = self.g.compile(p)
+            if len({fn(s) for s in states}) > 1:
+                keep.append(p)
+        return conj(*keep) if keep else phi
+
+    def show(self, f: Formula) -> str:
+        parts = f.args if isinstance(f, And) else (f,)
+        return " and ".join(self.g.display.get(p, str(p)) for p in parts)
+
+    def ask(self, es: EState, phi: Formula) -> EState:
+        fn = self.g.compile(phi)
+        v = fn(es.true)
+        keep = tuple(w for w in es.worlds if fn(w[0]) == v)
+        if not keep:  # cannot happen for asks the human generates; revise to be safe
+            m = 0
+            for i in ground_atoms(phi):
+                m |= 1 << i
+            keep = self.observe(es.true, es.worlds, m)
+        return es._replace(turn=ROBOT, worlds=keep, passive=0)
+
+    def inform(self, es: EState, mask: int) -> EState:
+        return es._replace(turn=HUMAN, worlds=self.observe(es.true, es.worlds, mask), passive=0)
+
+    def inform_label(self, t: int, mask: int) -> str:
+        parts = [(self.g.atoms[i] if t >> i & 1 else f"not {self.g.atoms[i]}")
+                 for i in bits_of(mask)]
+        return f"inform({', '.join(parts)})"
+
+    def human_view(self, agenda: Agenda, states: tuple[int, ...]) -> frozenset[tuple[int, bool]]:
+        full = (1 << len(states)) - 1
+        return frozenset((u.op, u.worlds == full) for u in self.H.refine_in_all(agenda, states))
+
+    def robot_view(self, worlds: Worlds) -> frozenset[int]:
+        return frozenset(op for s, ag in worlds for op, _ in self.RH.refine(ag, s))
+
+    def informing_set(self, es: EState) -> int:
+        """A smallest set of atoms (as a mask) whose correction makes the human's next options
+        and expectations of the robot, computed on W, equal those computed on the truth; 0 when
+        the divergence is irrelevant or cannot be fixed by telling atoms."""
+        key = (es.true, es.robot_agenda, es.human_agenda, es.worlds)
+        r = self._inform.get(key)
+        if r is None:
+            r = self._inform[key] = self._informing_set(es)
+        return r
+
+    def _informing_set(self, es: EState) -> int:
+        t = es.true
+        states = states_of(es.worlds)
+        div = 0
+        for s in states:
+            div |= s ^ t
+        if not div:
+            return 0
+        hv_t = self.human_view(es.human_agenda, (t,))
+        rv_t = frozenset(op for op, _ in self.R.refine(es.robot_agenda, t))
+        h_diff = self.human_view(es.human_agenda, states) != hv_t
+        r_diff = self.robot_view(es.worlds) != rv_t
+        if not (h_diff or r_diff):
+            return 0
+        cands = bits_of(div)
+        targets = [(h_diff, r_diff)] + ([(True, False)] if h_diff and r_diff else [])
+        for want_h, want_r in targets:
+            for size in range(1, min(len(cands), self.options.inform_max_atoms) + 1):
+                best: tuple[int, int, list[str], int] | None = None
+                for combo in combinations(cands, size):
+                    m = 0
+                    for i in combo:
+                        m |= 1 << i
+                    w2 = self.observe(t, es.worlds, m)
+                    if want_h and self.human_view(es.human_agenda, states_of(w2)) != hv_t:
+                        continue
+                    if want_r and self.robot_view(w2) != rv_t:
+                        continue
+                    # prefer fewer remaining worlds, then telling what is true, then by name
+                    rank = (len(w2), -bin(t & m).count("1"), [self.g.atoms[i] for i in combo], m)
+                    if best is None or rank < best:
+                        best = rank
+                if best is not None:
+                    return best[3]
+        return 0

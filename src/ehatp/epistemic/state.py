@@ -1,0 +1,40 @@
+"""Epistemic states ``s = <d, W>`` as immutable, hashable tuples.
+
+``d`` is the designated world (true state and both agendas); ``W`` the worlds the human
+entertains, each a state plus the robot agenda the human attributes to the robot there. A node
+of the search also carries whose turn it is, the K-counter and the count of consecutive passive
+moves: exactly what the transition rules read, so equal tuples are interchangeable (sound
+duplicate detection).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import NamedTuple
+
+from ..model.htn import Agenda
+
+ROBOT, HUMAN = 0, 1
+
+World = tuple[int, Agenda]
+Worlds = tuple[World, ...]
+
+
+class EState(NamedTuple):
+    turn: int
+    true: int
+    robot_agenda: Agenda
+    human_agenda: Agenda
+    worlds: Worlds
+    k: int
+    passive: int
+
+
+def normalize(worlds: Iterable[World]) -> Worlds:
+    """Canonical form: distinct worlds, sorted (equal state and agenda are one world)."""
+    return tuple(sorted(set(worlds)))
+
+
+def states_of(worlds: Worlds) -> tuple[int, ...]:
+    """The distinct world states, sorted."""
+    return tuple(sorted({s for s, _ in worlds}))

@@ -1,0 +1,330 @@
+"""The declarative domain API: types, predicates with observability, per-agent HTN models.
+
+A domain is a short Python module::
+
+    d = Domain("kitchen")
+    Place = d.type("place")
+    a, p = Var("a", "agent"), Var("p", Place)
+    at = d.predicate("at", a, p)                       # observable by default
+    washed = d.predicate("washed", observability=HIDDEN)
+    d.copresence = at("R", "kitchen") & at("H", "kitchen")
+    wash = d.robot.action("wash", pre=~washed(), effects=[washed()])
+    prepare = d.robot.task("prepare", done=washed())
+    d.robot.method(prepare, "by_washing", subtasks=[wash()])
+
+Everything a domain says is data (formulas, effect lists, task references), so the planner can
+analyse it: which atoms a precondition reads, what the human can see, how to print a policy.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from typing import Literal
+
+from .formula import TRUE, Atom, Formula, Not, Term, Var, free_vars
+
+AGENT_TYPE = "agent"
+
+
+class DomainError(Exception):
+    """A mistake in a domain definition (raised while the domain module is built)."""
+
+
+# --- observability ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Observability:
+    kind: Literal["observable", "inferable", "hidden"]
+    when: Formula = TRUE
+
+    def __str__(self) -> str:
+        return f"observable when {self.when}" if self.kind == "observable" else self.kind
+
+
+def observable(when: Formula = TRUE) -> Observability:
+    """The human perceives the atom's value whenever ``when`` holds in the true state."""
+    return Observability("observable", when)
+
+
+INFERABLE = Observability("inferable")
+"""Learned only by witnessing the action that changed it."""
+HIDDEN = Observability("hidden")
+"""Learned only through communication."""
+
+
+# --- predicates ------------------------------------------------------------------------------
+
+
+def _check_args(kind: str, name: str, params: Sequence[Var], args: Sequence[Term]) -> None:
+    if len(args) != len(params):
+        raise DomainError(f"{kind} {name} takes {len(params)} argument(s), got {len(args)}")
+    for p, a in zip(params, args, strict=True):
+        if isinstance(a, Var) and a.type != p.type:
+            raise DomainError(
+                f"{kind} {name}: argument {a.name} has type {a.type}, expected {p.type}"
+            )
+        if not isinstance(a, Var | str):
+            raise DomainError(f"{kind} {name}: argument {a!r} is neither a Var nor an object name")
+
+
+@dataclass(frozen=True, eq=False)
+class Predicate:
+    name: str
+    params: tuple[Var, ...]
+    observability: Observability
+
+    def __call__(self, *args: Term) -> Atom:
+        _check_args("predicate", self.name, self.params, args)
+        return Atom(self.name, tuple(args))
+
+
+@dataclass(frozen=True, eq=False)
+class Derived:
+    """A named formula (non-recursive macro), e.g. ``can_put(c, b)``: printed by name, expanded
+    when grounded."""
+
+    name: str
+    params: tuple[Var, ...]
+    body: Formula
+
+    def __call__(self, *args: Term) -> Atom:
+        _check_args("derived predicate", self.name, self.params, args)
+        return Atom(self.name, tuple(args))
+
+
+# --- effects ---------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class When:
+    """Conditional effect: ``effects`` apply if ``cond`` holds before the action."""
+
+    cond: Formula
+    effects: tuple[Effect, ...]
+
+
+@dataclass(frozen=True)
+class ForEach:
+    """Universal effect over typed variables."""
+
+    vars: tuple[Var, ...]
+    effects: tuple[Effect, ...]
+
+
+Effect = Atom | Not | When | ForEach
+"""An atom is added, ``~atom`` is deleted."""
+
+
+def when(cond: Formula, *effects: Effect) -> When:
+    return When(cond, tuple(effects))
+
+
+def for_each(vars: Var | Sequence[Var], *effects: Effect) -> ForEach:
+    return ForEach(tuple([vars] if isinstance(vars, Var) else vars), tuple(effects))
+
+
+# --- tasks -----------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class TaskRef:
+    """A (possibly non-ground) reference to a task in a method body or an agenda."""
+
+    name: str
+    args: tuple[Term, ...]
+
+    def __str__(self) -> str:
+        return f"{self.name}({', '.join(str(a) if isinstance(a, Var) else a for a in self.args)})"
+
+
+@dataclass(frozen=True, eq=False)
+class Operator:
+    name: str
+    params: tuple[Var, ...]
+    pre: Formula
+    effects: tuple[Effect, ...]
+    cost: int | float
+    done: Formula | None
+
+    def __call__(self, *args: Term) -> TaskRef:
+        _check_args("action", self.name, self.params, args)
+        return TaskRef(self.name, tuple(args))
+
+
+@dataclass(frozen=True, eq=False)
+class AbstractTask:
+    name: str
+    params: tuple[Var, ...]
+    done: Formula | None
+
+    def __call__(self, *args: Term) -> TaskRef:
+        _check_args("task", self.name, self.params, args)
+        return TaskRef(self.name, tuple(args))
+
+
+@dataclass(frozen=True, eq=False)
+class Method:
+    task: AbstractTask
+    name: str
+    params: tuple[Var, ...]
+    pre: Formula
+    subtasks: tuple[TaskRef, ...]
+
+
+@dataclass(eq=False)
+class AgentModel:
+    """One agent's HTN model: its operators, abstract tasks and methods."""
+
+    agent: str
+    operators: dict[str, Operator] = field(default_factory=dict)
+    tasks: dict[str, AbstractTask] = field(default_factory=dict)
+    methods: list[Method] = field(default_factory=list)
+
+    def _fresh(self, name: str) -> None:
+        if name in self.operators or name in self.tasks:
+            raise DomainError(f"{self.agent}: task or action {name!r} is defined twice")
+
+    def action(
+        self,
+        name: str,
+        *params: Var,
+        pre: Formula = TRUE,
+        effects: Iterable[Effect] = (),
+        cost: int | float = 1,
+        done: Formula | None = None,
+    ) -> Operator:
+        """Declare a primitive action of this agent."""
+        self._fresh(name)
+        if cost <= 0:
+            raise DomainError(f"{self.agent}.{name}: cost must be positive, got {cost}")
+        op = Operator(name, tuple(params), pre, tuple(effects), cost, done)
+        _check_scope(f"action {name}", set(params), [pre, *([done] if done else [])])
+        self.operators[name] = op
+        return op
+
+    def task(self, name: str, *params: Var, done: Formula | None = None) -> AbstractTask:
+        """Declare an abstract task; ``done`` lets the agent skip it when it already holds."""
+        self._fresh(name)
+        t = AbstractTask(name, tuple(params), done)
+        if done is not None:
+            _check_scope(f"task {name}", set(params), [done])
+        self.tasks[name] = t
+        return t
+
+    def method(
+        self,
+        task: AbstractTask,
+        name: str,
+        *,
+        params: Sequence[Var] = (),
+        pre: Formula = TRUE,
+        subtasks: Sequence[TaskRef] = (),
+    ) -> Method:
+        """A way to decompose ``task``; ``params`` beyond the task's are chosen freely (one
+        alternative per binding satisfying ``pre``)."""
+        if self.tasks.get(task.name) is not task:
+            raise DomainError(f"{self.agent}: method {name} refines {task.name}, not a task here")
+        scope = set(task.params) | set(params)
+        _check_scope(f"method {task.name}.{name}", scope, [pre])
+        for st in subtasks:
+            loose = {a for a in st.args if isinstance(a, Var)} - scope
+            if loose:
+                raise DomainError(f"method {task.name}.{name}: subtask {st} uses unbound "
+                                  f"{', '.join(sorted(v.name for v in loose))}")
+        m = Method(task, name, tuple(params), pre, tuple(subtasks))
+        self.methods.append(m)
+        return m
+
+    def copy(self, agent: str | None = None) -> AgentModel:
+        """A shallow copy, e.g. to start the human's estimate of the robot's model."""
+        return AgentModel(agent or self.agent, dict(self.operators), dict(self.tasks),
+                          list(self.methods))
+
+
+def _check_scope(where: str, scope: set[Var], formulas: Iterable[Formula]) -> None:
+    for f in formulas:
+        loose = free_vars(f) - scope
+        if loose:
+            raise DomainError(f"{where}: formula {f} uses unbound "
+                              f"{', '.join(sorted(v.name for v in loose))}")
+
+
+# --- the domain ------------------------------------------------------------------------------
+
+
+class Domain:
+    """Types, constants, predicates, co-presence and the three task models M_R, M_H, M_R^H."""
+
+    def __init__(self, name: str, *, robot: str = "R", human: str = "H", doc: str = "") -> None:
+        self.name = name
+        self.doc = doc
+        self.robot_name = robot
+        self.human_name = human
+        self.types: list[str] = [AGENT_TYPE]
+        self.constants: dict[str, str] = {robot: AGENT_TYPE, human: AGENT_TYPE}
+        self.predicates: dict[str, Predicate] = {}
+        self.derived_predicates: dict[str, Derived] = {}
+        self.robot = AgentModel(robot)
+        self.human = AgentModel(human)
+        self._robot_seen_by_human: AgentModel | None = None
+        self.copresence: Formula = TRUE
+        self.goal: Formula | None = None
+
+    @property
+    def robot_seen_by_human(self) -> AgentModel:
+        """M_R^H, the human's estimate of the robot's model (defaults to M_R itself)."""
+        return self._robot_seen_by_human or self.robot
+
+    @robot_seen_by_human.setter
+    def robot_seen_by_human(self, model: AgentModel) -> None:
+        self._robot_seen_by_human = model
+
+    def type(self, name: str) -> str:
+        if name in self.types:
+            raise DomainError(f"type {name!r} is declared twice")
+        self.types.append(name)
+        return name
+
+    def constant(self, name: str, type: str) -> str:
+        """An object every problem of this domain has (e.g. a named table)."""
+        if type not in self.types:
+            raise DomainError(f"constant {name}: unknown type {type!r}")
+        if name in self.constants:
+            raise DomainError(f"constant {name!r} is declared twice")
+        self.constants[name] = type
+        return name
+
+    def predicate(
+        self, name: str, *params: Var, observability: Observability | None = None
+    ) -> Predicate:
+        """Declare a predicate. Observable (always visible) unless told otherwise; the
+        visibility condition may use the predicate's own parameters."""
+        self._fresh_pred(name)
+        for p in params:
+            if p.type not in self.types:
+                raise DomainError(f"predicate {name}: unknown type {p.type!r}")
+        obs = observability or observable()
+        _check_scope(f"visibility of {name}", set(params), [obs.when])
+        pred = Predicate(name, tuple(params), obs)
+        self.predicates[name] = pred
+        return pred
+
+    def derived(self, name: str, params: Sequence[Var], body: Formula) -> Derived:
+        self._fresh_pred(name)
+        _check_scope(f"derived predicate {name}", set(params), [body])
+        d = Derived(name, tuple(params), body)
+        self.derived_predicates[name] = d
+        return d
+
+    def _fresh_pred(self, name: str) -> None:
+        if name in self.predicates or name in self.derived_predicates:
+            raise DomainError(f"predicate {name!r} is declared twice")
+
+    def models(self) -> dict[str, AgentModel]:
+        return {"robot": self.robot, "human": self.human,
+                "robot_seen_by_human": self.robot_seen_by_human}
+
+    def __repr__(self) -> str:
+        return f"Domain({self.name!r})"

@@ -1,0 +1,387 @@
+"""Formulas as data: a small immutable AST the planner can inspect, ground and compile.
+
+Domains build formulas with ordinary Python operators (``&``, ``|``, ``~``) on atoms made by
+calling predicates; nothing here is an opaque callback. Grounding substitutes parameters,
+expands quantifiers over the typed objects and folds static atoms; what is left is compiled
+once into a closure over an integer bitset state.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Union
+
+# --- terms -----------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class Var:
+    """A typed variable (operator/method parameter or quantified variable)."""
+
+    name: str
+    type: str
+
+    def __str__(self) -> str:
+        return f"?{self.name}"
+
+
+Term = Union[Var, str]  # a str is an object name (constant)
+
+
+def term_str(t: Term) -> str:
+    return str(t) if isinstance(t, Var) else t
+
+
+# --- formulas --------------------------------------------------------------------------------
+
+
+class Formula:
+    """Base class; subclasses are frozen dataclasses."""
+
+    __slots__ = ()
+
+    def __and__(self, other: Formula) -> Formula:
+        return conj(self, other)
+
+    def __or__(self, other: Formula) -> Formula:
+        return disj(self, other)
+
+    def __invert__(self) -> Formula:
+        return Not(self)
+
+    def __rshift__(self, other: Formula) -> Formula:  # implication, a >> b
+        return disj(Not(self), other)
+
+
+@dataclass(frozen=True, slots=True)
+class Atom(Formula):
+    pred: str
+    args: tuple[Term, ...]
+
+    def __str__(self) -> str:
+        return f"{self.pred}({', '.join(term_str(a) for a in self.args)})"
+
+
+@dataclass(frozen=True, slots=True)
+class Eq(Formula):
+    left: Term
+    right: Term
+
+    def __str__(self) -> str:
+        return f"{term_str(self.left)} = {term_str(self.right)}"
+
+
+@dataclass(frozen=True, slots=True)
+class Not(Formula):
+    arg: Formula
+
+    def __str__(self) -> str:
+        if isinstance(self.arg, Eq):
+            return f"{term_str(self.arg.left)} != {term_str(self.arg.right)}"
+        return f"not {_paren(self.arg)}"
+
+
+@dataclass(frozen=True, slots=True)
+class And(Formula):
+    args: tuple[Formula, ...]
+
+    def __str__(self) -> str:
+        return " and ".join(_paren(a) for a in self.args) if self.args else "true"
+
+
+@dataclass(frozen=True, slots=True)
+class Or(Formula):
+    args: tuple[Formula, ...]
+
+    def __str__(self) -> str:
+        return " or ".join(_paren(a) for a in self.args) if self.args else "false"
+
+
+@dataclass(frozen=True, slots=True)
+class Exists(Formula):
+    vars: tuple[Var, ...]
+    body: Formula
+
+    def __str__(self) -> str:
+        vs = ", ".join(f"{v.name}: {v.type}" for v in self.vars)
+        return f"exists {vs}: {_paren(self.body)}"
+
+
+@dataclass(frozen=True, slots=True)
+class Forall(Formula):
+    vars: tuple[Var, ...]
+    body: Formula
+
+    def __str__(self) -> str:
+        vs = ", ".join(f"{v.name}: {v.type}" for v in self.vars)
+        return f"forall {vs}: {_paren(self.body)}"
+
+
+TRUE: Formula = And(())
+FALSE: Formula = Or(())
+
+
+def _paren(f: Formula) -> str:
+    return f"({f})" if isinstance(f, And | Or | Exists | Forall) and str(f) not in (
+        "true",
+        "false",
+    ) else str(f)
+
+
+def conj(*fs: Formula) -> Formula:
+    out: list[Formula] = []
+    for f in fs:
+        if isinstance(f, And):
+            out.extend(f.args)
+        else:
+            out.append(f)
+    return out[0] if len(out) == 1 else And(tuple(out))
+
+
+def disj(*fs: Formula) -> Formula:
+    out: list[Formula] = []
+    for f in fs:
+        if isinstance(f, Or):
+            out.extend(f.args)
+        else:
+            out.append(f)
+    return out[0] if len(out) == 1 else Or(tuple(out))
+
+
+def exists(vars: Var | Sequence[Var], body: Formula) -> Formula:
+    return Exists(tuple([vars] if isinstance(vars, Var) else vars), body)
+
+
+def forall(vars: Var | Sequence[Var], body: Formula) -> Formula:
+    return Forall(tuple([vars] if isinstance(vars, Var) else vars), body)
+
+
+def eq(a: Term, b: Term) -> Formula:
+    return Eq(a, b)
+
+
+# --- traversal -------------------------------------------------------------------------------
+
+
+def free_vars(f: Formula) -> set[Var]:
+    if isinstance(f, Atom):
+        return {a for a in f.args if isinstance(a, Var)}
+    if isinstance(f, Eq):
+        return {a for a in (f.left, f.right) if isinstance(a, Var)}
+    if isinstance(f, Not):
+        return free_vars(f.arg)
+    if isinstance(f, And | Or):
+        out: set[Var] = set()
+        for a in f.args:
+            out |= free_vars(a)
+        return out
+    if isinstance(f, Exists | Forall):
+        return free_vars(f.body) - set(f.vars)
+    raise TypeError(f"not a formula: {f!r}")
+
+
+def atoms_of(f: Formula) -> Iterable[Atom]:
+    if isinstance(f, Atom):
+        yield f
+    elif isinstance(f, Not):
+        yield from atoms_of(f.arg)
+    elif isinstance(f, And | Or):
+        for a in f.args:
+            yield from atoms_of(a)
+    elif isinstance(f, Exists | Forall):
+        yield from atoms_of(f.body)
+
+
+# --- grounding -------------------------------------------------------------------------------
+
+AtomFn = Callable[[str, tuple[str, ...]], "bool | int | Formula"]
+"""Maps a ground atom to a static truth value, a fluent index (int) or a replacement formula."""
+
+
+@dataclass(frozen=True, slots=True)
+class GAtom(Formula):
+    """A ground fluent atom, by index in the grounded problem's atom table."""
+
+    index: int
+    name: str
+
+    def __str__(self) -> str:
+        return self.name
+
+
+def ground(
+    f: Formula,
+    binding: Mapping[Var, str],
+    objects: Mapping[str, Sequence[str]],
+    atom: Callable[[str, tuple[str, ...]], Formula],
+) -> Formula:
+    """Substitute ``binding``, expand quantifiers over ``objects`` (by type) and let ``atom``
+    turn each ground atom into TRUE, FALSE, a GAtom or a (ground) formula; then simplify."""
+
+    def term(t: Term, b: Mapping[Var, str]) -> str:
+        if isinstance(t, Var):
+            return b[t]
+        return t
+
+    def go(f: Formula, b: Mapping[Var, str]) -> Formula:
+        if isinstance(f, Atom):
+            return atom(f.pred, tuple(term(a, b) for a in f.args))
+        if isinstance(f, Eq):
+            return TRUE if term(f.left, b) == term(f.right, b) else FALSE
+        if isinstance(f, Not):
+            return negate(go(f.arg, b))
+        if isinstance(f, And):
+            return simplify_and([go(a, b) for a in f.args])
+        if isinstance(f, Or):
+            return simplify_or([go(a, b) for a in f.args])
+        if isinstance(f, Exists | Forall):
+            parts = [go(f.body, {**b, **dict(zip(f.vars, vals, strict=True))})
+                     for vals in _product([objects[v.type] for v in f.vars])]
+            return simplify_or(parts) if isinstance(f, Exists) else simplify_and(parts)
+        if isinstance(f, GAtom):
+            return f
+        raise TypeError(f"not a formula: {f!r}")
+
+    return go(f, binding)
+
+
+def _product(domains: Sequence[Sequence[str]]) -> Iterable[tuple[str, ...]]:
+    if not domains:
+        yield ()
+        return
+    for head in domains[0]:
+        for tail in _product(domains[1:]):
+            yield (head, *tail)
+
+
+def negate(f: Formula) -> Formula:
+    if f == TRUE:
+        return FALSE
+    if f == FALSE:
+        return TRUE
+    if isinstance(f, Not):
+        return f.arg
+    return Not(f)
+
+
+def simplify_and(parts: Iterable[Formula]) -> Formula:
+    out: list[Formula] = []
+    for p in parts:
+        if p == FALSE:
+            return FALSE
+        if p == TRUE:
+            continue
+        for q in p.args if isinstance(p, And) else (p,):
+            if q not in out:
+                out.append(q)
+    return out[0] if len(out) == 1 else And(tuple(out))
+
+
+def simplify_or(parts: Iterable[Formula]) -> Formula:
+    out: list[Formula] = []
+    for p in parts:
+        if p == TRUE:
+            return TRUE
+        if p == FALSE:
+            continue
+        for q in p.args if isinstance(p, Or) else (p,):
+            if q not in out:
+                out.append(q)
+    return out[0] if len(out) == 1 else Or(tuple(out))
+
+
+def ground_atoms(f: Formula) -> set[int]:
+    """Indices of the fluent atoms a ground formula mentions."""
+    if isinstance(f, GAtom):
+        return {f.index}
+    if isinstance(f, Not):
+        return ground_atoms(f.arg)
+    if isinstance(f, And | Or):
+        out: set[int] = set()
+        for a in f.args:
+            out |= ground_atoms(a)
+        return out
+    return set()
+
+
+# --- compilation -----------------------------------------------------------------------------
+
+StateFn = Callable[[int], bool]
+
+
+def compile_ground(f: Formula) -> StateFn:
+    """Compile a ground formula into ``fn(state_bits) -> bool``.
+
+    Conjunctions of literals (the common case) become two mask tests; the rest is generated
+    Python source, compiled once, so evaluation in the search loop is a single call.
+    """
+    if f == TRUE:
+        return _true
+    if f == FALSE:
+        return _false
+    lits = _literals(f)
+    if lits is not None:
+        pos, neg = lits
+        if not neg:
+            return lambda s: s & pos == pos
+        if not pos:
+            return lambda s: not s & neg
+        return lambda s: s & pos == pos and not s & neg
+    src = f"lambda s: {_py(f)}"
+    fn: StateFn = eval(compile(src, "<ehatp formula>", "eval"))  # noqa: S307 - generated code
+    return fn
+
+
+def _true(s: int) -> bool:
+    return True
+
+
+def _false(s: int) -> bool:
+    return False
+
+
+def _literals(f: Formula) -> tuple[int, int] | None:
+    pos = neg = 0
+    for p in f.args if isinstance(f, And) else (f,):
+        if isinstance(p, GAtom):
+            pos |= 1 << p.index
+        elif isinstance(p, Not) and isinstance(p.arg, GAtom):
+            neg |= 1 << p.arg.index
+        else:
+            return None
+    return pos, neg
+
+
+def _py(f: Formula) -> str:
+    if isinstance(f, GAtom):
+        return f"(s >> {f.index} & 1 == 1)"
+    if isinstance(f, Not):
+        return f"(not {_py(f.arg)})"
+    if isinstance(f, And):
+        return "(" + " and ".join(_py(a) for a in f.args) + ")" if f.args else "True"
+    if isinstance(f, Or):
+        return "(" + " or ".join(_py(a) for a in f.args) + ")" if f.args else "False"
+    raise TypeError(f"formula is not ground: {f}")
+
+
+def substitute(f: Formula, binding: Mapping[Var, str]) -> Formula:
+    """Replace bound variables by object names, keeping the formula's shape (for display)."""
+
+    def t(x: Term) -> Term:
+        return binding.get(x, x) if isinstance(x, Var) else x
+
+    if isinstance(f, Atom):
+        return Atom(f.pred, tuple(t(a) for a in f.args))
+    if isinstance(f, Eq):
+        return Eq(t(f.left), t(f.right))
+    if isinstance(f, Not):
+        return Not(substitute(f.arg, binding))
+    if isinstance(f, And):
+        return And(tuple(substitute(a, binding) for a in f.args))
+    if isinstance(f, Or):
+        return Or(tuple(substitute(a, binding) for a in f.args))
+    if isinstance(f, Exists | Forall):
+        inner = {k: v for k, v in binding.items() if k not in f.vars}
+        return type(f)(f.vars, substitute(f.body, inner))
+    return f

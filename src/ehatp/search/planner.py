@@ -1,0 +1,54 @@
+"""``solve``: ground a problem, search it, and return the policy with its statistics."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..model.grounding import ground_problem
+from ..model.problem import Problem
+from .andor import Progress, search
+from .policy import Policy, explain_failure, extract
+
+
+@dataclass
+class Result:
+    status: str  # "solved" | "unsolvable" | "timeout" | "state-limit"
+    policy: Policy | None
+    stats: dict[str, Any] = field(default_factory=dict)
+    reason: str = ""
+    optimal: bool = False
+
+    @property
+    def solved(self) -> bool:
+        return self.policy is not None
+
+
+def solve(problem: Problem, *, timeout: float | None = None, max_states: int | None = None,
+          max_depth: int | None = None, progress: Progress | None = None) -> Result:
+    """Plan a worst-case-optimal robot policy for ``problem``.
+
+    Limits default to the problem's ``[limits]``. When a limit stops the search the result
+    carries partial statistics, and the best policy found so far if there is one
+    (``optimal`` False).
+    """
+    grounded = ground_problem(problem)
+    out = search(grounded, timeout=timeout, max_states=max_states, max_depth=max_depth,
+                 progress=progress)
+    stats: dict[str, Any] = out.stats.as_dict()
+    stats["atoms"] = len(grounded.atoms)
+    policy = None
+    if out.values is not None and out.values.value[out.root] != float("inf"):
+        public = {k: v for k, v in stats.items() if k != "time_ms"}
+        policy = extract(out.graph, out.root, out.values, problem_name=problem.name,
+                         optimal=out.optimal, stats=public)
+        stats.update(cost=policy.cost, communications=policy.communications,
+                     leaves=policy.leaves)
+    reason = ""
+    if out.status == "unsolvable":
+        reason = "no policy exists: " + explain_failure(out.graph, out.root)
+    elif out.status == "timeout":
+        reason = f"time limit reached after {out.stats.time_s:.1f} s"
+    elif out.status == "state-limit":
+        reason = f"state limit reached ({out.stats.distinct} distinct states)"
+    return Result(out.status, policy, stats, reason, out.optimal)
