@@ -14,7 +14,7 @@ Our modelling choices: the placement rule ``can_put`` and the goal are derived p
 
 from __future__ import annotations
 
-from ..model.domain import Domain, for_each, observable
+from ..model.domain import Domain, TaskRef, for_each, observable
 from ..model.formula import Var, eq, exists, forall
 
 R, H = "R", "H"
@@ -83,7 +83,7 @@ def make_domain(turn_before_move: bool = False) -> Domain:
         move = hm.action("move", t1, t2, pre=at(H, t1) & facing(H, t1) & ~eq(t1, t2),
                          effects=[at(H, t2), facing(H, t2), ~at(H, t1), ~facing(H, t1)])
 
-    def go(src: Var | str, dst: Var | str) -> list:
+    def go(src: Var | str, dst: Var | str) -> list[TaskRef]:
         return ([turn(src, dst)] if turn_before_move else []) + [move(src, dst)]
 
     h_org = hm.task("organize", done=goal())

@@ -66,6 +66,24 @@ class Semantics:
         self._succ: dict[World, tuple[World, ...]] = {}
         self._inform: dict[tuple[int, Agenda, Agenda, Worlds], int] = {}
 
+    def follow(self, es: EState, label: str) -> Move:
+        """The move of the agent to move whose label is ``label`` (an agent name may lead,
+        spaces are ignored); ValueError naming the options when there is none."""
+        want = "".join(label.split())
+        for name in self.names:
+            if want.startswith(name) and not want.startswith(name + "(") and any(
+                    "".join(m.label.split()) == want[len(name):] for m in self.moves(es)):
+                want = want[len(name):]
+        moves = self.moves(es)
+        for m in moves:
+            if "".join(m.label.split()) == want:
+                if m.child is None:
+                    raise ValueError(f"{label!r} fails here: {m.failure}")
+                return m
+        who = self.names[es.turn]
+        raise ValueError(f"{label!r} is not a move of {who} here; options: "
+                         + ", ".join(m.label for m in moves))
+
     # -- basics ---------------------------------------------------------------------------
     def initial(self) -> EState:
         g = self.g
@@ -197,7 +215,7 @@ class Semantics:
         return es._replace(turn=HUMAN, worlds=worlds, k=k, passive=es.passive + 1)
 
     def human_moves(self, es: EState) -> list[Move]:
-        t, cop = es.true, self.copresent(es.true)
+        cop = self.copresent(es.true)
         states = states_of(es.worlds)
         full = (1 << len(states)) - 1
         acts: list[tuple[int, Agenda]] = []

@@ -136,6 +136,8 @@ class TaskRef:
     args: tuple[Term, ...]
 
     def __str__(self) -> str:
+        if not self.args:
+            return self.name
         return f"{self.name}({', '.join(str(a) if isinstance(a, Var) else a for a in self.args)})"
 
 

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Union
 
 # --- terms -----------------------------------------------------------------------------------
 
@@ -26,7 +25,7 @@ class Var:
         return f"?{self.name}"
 
 
-Term = Union[Var, str]  # a str is an object name (constant)
+Term = Var | str  # a str is an object name (constant)
 
 
 def term_str(t: Term) -> str:
@@ -60,7 +59,12 @@ class Atom(Formula):
     args: tuple[Term, ...]
 
     def __str__(self) -> str:
+        if not self.args:
+            return self.pred
         return f"{self.pred}({', '.join(term_str(a) for a in self.args)})"
+
+    def __invert__(self) -> Not:  # narrower than Formula's, so ``~atom`` types as an effect
+        return Not(self)
 
 
 @dataclass(frozen=True, slots=True)

@@ -8,8 +8,9 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from fractions import Fraction
 
-from .domain import AgentModel, Domain, DomainError, Effect, ForEach, TaskRef, When
+from .domain import AgentModel, Domain, DomainError, Effect, ForEach, Method, TaskRef, When
 from .formula import (
     FALSE,
     TRUE,
@@ -209,7 +210,7 @@ class _Grounder:
             belief_agendas.append(ag)
             beliefs.append((s, ag))
         rh = (robot if d.robot_seen_by_human is d.robot
-              else self.ground_model(d.robot_seen_by_human, belief_agendas))
+              else self.ground_model(d.robot_seen_by_human, belief_agendas, estimate=True))
         if rh is robot and any(ag != r_ag for ag in belief_agendas):
             robot = rh = self.ground_model(d.robot, belief_agendas)
 
@@ -224,7 +225,8 @@ class _Grounder:
             task_index=self.task_index, robot=robot, human=human, robot_seen_by_human=rh,
             init=init, beliefs=beliefs, robot_agenda=r_ag, human_agenda=h_ag, visible=visible,
             observable_mask=obs, inferable_mask=inf, hidden_mask=hid, copresent_f=cop_f,
-            copresent=self.compile(cop_f), goal_f=goal_f, goal=self.compile(goal_f), fns=self.fns, display=self.display,
+            copresent=self.compile(cop_f), goal_f=goal_f, goal=self.compile(goal_f), fns=self.fns,
+            display=self.display,
         )
 
     def bits(self, names: Iterable[str]) -> int:
@@ -278,14 +280,17 @@ class _Grounder:
     def agenda(self, calls: Iterable[tuple[str, tuple[str, ...]]]) -> tuple[int, ...]:
         return tuple(self.task_id(call_str(n, a)) for n, a in calls)
 
-    def ground_model(self, model: AgentModel, agendas: Sequence[tuple[int, ...]]) -> GModel:
+    def ground_model(self, model: AgentModel, agendas: Sequence[tuple[int, ...]],
+                     estimate: bool = False) -> GModel:
+        """Ground the tasks reachable from ``agendas``. In the human's ``estimate`` of the robot
+        model a task it does not know has no way to be done (the human cannot expect it)."""
         g = GModel(model.agent)
         calls: dict[int, tuple[str, tuple[str, ...]]] = {}
         todo = [t for ag in agendas for t in ag]
         for t in todo:
             calls[t] = _split(self.task_names[t])
         seen: set[int] = set()
-        methods_of: dict[str, list] = {}
+        methods_of: dict[str, list[Method]] = {}
         for m in model.methods:
             methods_of.setdefault(m.task.name, []).append(m)
         while todo:
@@ -299,13 +304,16 @@ class _Grounder:
                 b = dict(zip(op.params, args, strict=True))
                 pre_f = self.shown(op.pre, b)
                 add, dele, cond = self.effects(op.effects, b, TRUE)
-                cost = self.p.costs.actions.get(name, op.cost)
+                cost = self.p.costs.actions.get(name, _exact(op.cost))
                 done_f = self.ground_f(op.done, b) if op.done is not None else None
                 g.ops[t] = GOp(t, self.task_names[t], name, args, pre_f, self.compile(pre_f),
                                add, dele, tuple(cond), cost, done_f,
                                self.compile(done_f) if done_f is not None else None)
                 continue
             task = model.tasks.get(name)
+            if task is None and estimate:
+                g.methods[t] = ()
+                continue
             if task is None:
                 raise DomainError(f"{model.agent} has no task or action {name!r}")
             tb = dict(zip(task.params, args, strict=True))
@@ -379,6 +387,11 @@ class _Grounder:
             else:
                 raise DomainError(f"not an effect: {e!r}")
         return add, dele & ~add, conds
+
+
+def _exact(c: int | float) -> Cost:
+    """Costs are summed and compared exactly: a float becomes the Fraction it reads as."""
+    return c if isinstance(c, int) else Fraction(str(c))
 
 
 def _effect_preds(effs: Iterable[Effect]) -> set[str]:

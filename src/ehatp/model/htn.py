@@ -84,7 +84,7 @@ class Refiner:
                 out: dict[tuple[int, Agenda, tuple[Formula, ...]], int], depth: int) -> None:
         m = self.model
         if not agenda:
-            key = (FINISH, (), conds)
+            key: tuple[int, Agenda, tuple[Formula, ...]] = (FINISH, (), conds)
             out[key] = out.get(key, 0) | ws
             return
         t = agenda[0]
@@ -102,8 +102,8 @@ class Refiner:
                 ws = ws2
             pw = _holds(op.pre, states, ws)
             if pw:
-                key = (t, rest, _add(conds, op.pre_f, pw != ws))
-                out[key] = out.get(key, 0) | pw
+                k2 = (t, rest, _add(conds, op.pre_f, pw != ws))
+                out[k2] = out.get(k2, 0) | pw
             return
         d = m.done.get(t)
         if d is not None:

@@ -83,6 +83,8 @@ class Problem:
     limits: Limits = field(default_factory=Limits)
     options: Options = field(default_factory=Options)
     goal: tuple[tuple[bool, GroundAtom], ...] = ()
+    # a fixed opening line of play (move labels); the policy starts where it ends
+    after: tuple[str, ...] = ()
     description: str = ""
     source: str = "<python>"
 
@@ -188,7 +190,8 @@ def load(path: str | Path) -> Problem:
             raise r.err(k, f"unknown table or key {k!r}",
                         f"use {', '.join(sorted(_TOP_KEYS))}", k)
 
-    prob = r.table(data, "problem", {"name", "description", "starts", "K"}, required=True)
+    prob = r.table(data, "problem", {"name", "description", "starts", "K", "after"},
+                   required=True)
     dom_t = r.table(data, "domain", _any_key, required=True)
     domain = _resolve_domain(r, dom_t, p.parent)
 
@@ -286,10 +289,12 @@ def load(path: str | Path) -> Problem:
                     "write true or false", "human_passes_when_blocked")
     options = Options(hp, _int(r, "[options] inform_max_atoms", o_t.get("inform_max_atoms", 3)))
     description = prob.get("description", "")
+    after = tuple(r.strings("[problem] after", prob.get("after", [])))
     return Problem(name=name, domain=domain, objects=objects, init=init,
                    robot_agenda=agendas["robot"], human_agenda=agendas["human"], beliefs=beliefs,
                    starts=starts, K=K, costs=costs, limits=limits, options=options,
-                   goal=tuple(goal), description=str(description), source=str(path))
+                   goal=tuple(goal), after=after, description=str(description),
+                   source=str(path))
 
 
 class _AnyKey(set[str]):
@@ -327,7 +332,7 @@ def _task(r: _Reader, place: str, text: str, domain: Domain, who: str,
     if c is None:
         raise r.err(place, f"cannot read task {text!r}", 'write it as "task(obj, ...)"', text)
     name, args = c
-    models = ([domain.robot, domain.robot_seen_by_human] if who == "robot" else [domain.human])
+    models = [domain.robot] if who == "robot" else [domain.human]
     for m in models:
         decl = m.operators.get(name) or m.tasks.get(name)
         if decl is None:
@@ -349,7 +354,7 @@ def _beliefs(r: _Reader, raw: Any, atom: Callable[[str, str], GroundAtom],
     if keys - {"true", "false", "world"} or ("world" in keys and keys & {"true", "false"}):
         raise r.err("[beliefs]", "use either true/false (one world) or [[beliefs.world]] entries",
                     "see docs/problem-format.md", "beliefs")
-    entries = raw["world"] if "world" in raw else [raw]
+    entries = raw.get("world", [raw])
     if not isinstance(entries, list) or not entries:
         raise r.err("[beliefs] world", "expected one or more [[beliefs.world]] tables",
                     "write [[beliefs.world]]")
@@ -423,9 +428,10 @@ def _resolve_domain(r: _Reader, t: Mapping[str, Any], base: Path) -> Domain:
         raise r.err("[domain]", f"bad domain options for {ref!r}: {e}",
                     "see the domain's documentation for its options") from None
     except DomainError as e:
-        raise r.err("[domain]", f"domain {ref!r} is malformed: {e}", "fix the domain module")
+        raise r.err("[domain]", f"domain {ref!r} is malformed: {e}",
+                    "fix the domain module") from None
     except ValueError as e:
-        raise r.err("[domain]", f"bad domain option for {ref!r}: {e}", "fix the option")
+        raise r.err("[domain]", f"bad domain option for {ref!r}: {e}", "fix the option") from None
     if not isinstance(dom, Domain):
         raise r.err("[domain] name", f"{ref!r} did not give a Domain", "return a Domain")
     return dom

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 from ..epistemic.semantics import DEAD_PASSIVE_RUN, Move, Semantics
 from ..epistemic.state import ROBOT, EState
+from ..errors import InputError
 from ..model.grounding import Grounded
 from ..model.problem import Cost
 from .values import Values, compute_values
@@ -104,6 +105,12 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
     stats = Stats()
     start = time.perf_counter()
     root_state = sem.initial()
+    for i, label in enumerate(grounded.problem.after):
+        try:
+            root_state = sem.follow(root_state, label).child  # type: ignore[assignment]
+        except ValueError as e:
+            raise InputError(grounded.problem.source, f"[problem] after, step {i + 1}", str(e),
+                             "give a move possible at that point") from None
     root = gr.add(root_state, 0, 0)
     stats.generated = stats.distinct = 1
     stats.max_worlds = len(root_state.worlds)

@@ -66,6 +66,7 @@ class Policy:
     leaves: int
     optimal: bool = True
     stats: dict[str, Any] = field(default_factory=dict)
+    after: list[str] = field(default_factory=list)  # the fixed opening the root follows
 
     @property
     def root(self) -> PolicyNode:
@@ -95,7 +96,7 @@ class Policy:
             "format": FORMAT, "version": VERSION, "problem": self.problem, "domain": self.domain,
             "agents": self.agents, "K": self.K, "costs": self.costs, "cost": _num(self.cost),
             "communications": self.communications, "leaves": self.leaves,
-            "optimal": self.optimal, "stats": self.stats,
+            "optimal": self.optimal, "stats": self.stats, "after": self.after,
             "nodes": [n.to_dict() for n in self.nodes], "timelines": self.timelines(),
         }
 
@@ -113,7 +114,8 @@ class Policy:
             raise ValueError(f"policy format version {d.get('version')} is not {VERSION}")
         nodes = [PolicyNode(**{k: v for k, v in n.items()}) for n in d["nodes"]]
         return cls(d["problem"], d["domain"], d["agents"], d["K"], d["costs"], nodes, d["cost"],
-                   d["communications"], d["leaves"], d.get("optimal", True), d.get("stats", {}))
+                   d["communications"], d["leaves"], d.get("optimal", True), d.get("stats", {}),
+                   d.get("after", []))
 
     @classmethod
     def read(cls, path: str | Path) -> Policy:
@@ -166,8 +168,9 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
         for s in sorted({s for s, _ in es.worlds}):
             div |= s ^ t
             diffs.append({"true": g.mask_atoms(s & ~t), "false": g.mask_atoms(t & ~s)})
+        cost: Cost = 0
         if move is None:
-            agent, kind, label, name, args, cost = None, "start", "start", "start", [], 0
+            agent, kind, label, name, args = None, "start", "start", "start", []
         else:
             agent = r_name if move.agent == ROBOT else h_name
             kind, label, cost = move.kind, move.label, move.cost
@@ -225,7 +228,7 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
              "actions": {k: _num(v) for k, v in sorted(p.costs.actions.items())}}
     return Policy(problem_name, p.domain.name, {"robot": r_name, "human": h_name}, p.K, costs,
                   order, values.value[root], comms, leaves,  # type: ignore[arg-type]
-                  optimal, stats or {})
+                  optimal, stats or {}, list(p.after))
 
 
 def explain_failure(gr: Graph, root: int) -> str:
