@@ -1,0 +1,35 @@
+# The two commands a newcomer needs; each sets up .venv on first use.
+VENV ?= .venv
+BIN := $(VENV)/bin
+
+.PHONY: demo test lint bench system-deps clean
+
+$(VENV)/.installed: pyproject.toml
+	python3 -m venv $(VENV)
+	$(BIN)/pip install -q --upgrade pip
+	$(BIN)/pip install -q -e '.[test]'
+	touch $@
+
+## Solve the two-cube opaque instance (Table 1 P2) and show its policy.
+demo: $(VENV)/.installed
+	$(BIN)/ehatp solve examples/cubes/p2.toml --out p2.policy.json
+	$(BIN)/ehatp show p2.policy.json
+
+## Run the whole test suite (ruff and mypy included).
+test: $(VENV)/.installed
+	$(BIN)/python -m pytest
+
+lint: $(VENV)/.installed
+	$(BIN)/ruff check src tests benchmarks examples
+	$(BIN)/mypy
+
+## Reproduce Table 1 with timings.
+bench: $(VENV)/.installed
+	$(BIN)/ehatp bench table1
+
+## Debian packages some tests use (Graphviz for SVG, Chromium for the explorer test); needs root.
+system-deps:
+	apt-get update -qq && apt-get install -y -qq graphviz chromium chromium-driver
+
+clean:
+	rm -rf $(VENV) p2.policy.json .pytest_cache .mypy_cache .ruff_cache .hypothesis
