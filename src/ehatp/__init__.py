@@ -33,8 +33,21 @@ def validate(problem: Problem, policy: Policy) -> "check.Report":  # noqa: F821
     return _validate(problem, policy)
 
 
+_TOOLS = {"Executor", "UncoveredHumanAction", "ExecutionError", "PolicyMismatch"}
+
+
+def __getattr__(name: str) -> object:
+    # the execution API lives in tools/; import it only when asked for
+    if name in _TOOLS:
+        from .tools import executor
+
+        return getattr(executor, name)
+    raise AttributeError(f"module 'ehatp' has no attribute {name!r}")
+
+
 __all__ = [
     "FALSE", "HIDDEN", "INFERABLE", "TRUE", "AgentModel", "BeliefWorld", "Costs", "Domain",
-    "DomainError", "EhatpError", "InputError", "Limits", "Options", "Policy", "Problem", "Result",
-    "Var", "eq", "exists", "for_each", "forall", "load", "observable", "solve", "validate", "when",
+    "DomainError", "EhatpError", "ExecutionError", "Executor", "InputError", "Limits", "Options",
+    "Policy", "PolicyMismatch", "Problem", "Result", "UncoveredHumanAction", "Var", "eq", "exists",
+    "for_each", "forall", "load", "observable", "solve", "validate", "when",
 ]

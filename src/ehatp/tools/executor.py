@@ -1,0 +1,466 @@
+"""Drive one execution of a robot policy, step by step, for a robot controller or a simulator.
+
+:class:`Executor` walks the policy tree while it tracks the epistemic state with the
+:class:`~ehatp.epistemic.semantics.Semantics` of the problem, so both views are checked against
+each other at every step. The robot asks :meth:`Executor.next_robot_action`, does it, and reports
+it with :meth:`Executor.robot_action_done`; what the human does is reported with
+:meth:`Executor.observe_human_action`, which raises :class:`UncoveredHumanAction` when the
+policy has no branch for it. A problem's fixed opening (``[problem] after``) is replayed first,
+as moves the executor expects. See ``docs/simulation.md``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..epistemic.semantics import ACTION, ASK, INFORM, WAIT, Move, Semantics, bits_of
+from ..epistemic.state import HUMAN, ROBOT, EState, Worlds, states_of
+from ..errors import EhatpError
+from ..model.formula import conj
+from ..model.grounding import FINISH, Grounded, ground_problem
+from ..model.problem import Cost, Problem
+from ..search.policy import Policy, PolicyNode
+
+MAX_WORLDS_LISTED = 8
+
+
+class ExecutionError(EhatpError):
+    """The execution cannot go on (wrong turn, or the policy and the problem disagree)."""
+
+
+class PolicyMismatch(ExecutionError):
+    """The policy does not fit the problem: its nodes disagree with the semantics."""
+
+
+class UncoveredHumanAction(ExecutionError):
+    """The human did something the policy has no branch for.
+
+    ``action`` is what was observed, ``expected`` the labels the policy covers here,
+    ``possible`` every move the human model allows here, ``reason`` why it is not covered.
+    """
+
+    def __init__(self, action: str, expected: list[str], possible: list[str],
+                 reason: str) -> None:
+        self.action, self.expected, self.possible, self.reason = action, expected, possible, reason
+        super().__init__(f"{reason}; the policy expects "
+                         + (" or ".join(expected) if expected else "no human action here"))
+
+
+@dataclass(frozen=True)
+class Action:
+    """One move in the domain's vocabulary. ``name``/``args`` split an operator call
+    (``place``, ``("w", "box2")``); for ``inform`` the args are the literals told, for ``ask``
+    the question; ``wait`` and ``pass`` have none."""
+
+    agent: str
+    kind: str  # action | wait | pass | inform | ask
+    label: str
+    name: str
+    args: tuple[str, ...]
+    cost: Cost
+
+
+@dataclass(frozen=True)
+class WorldView:
+    """One world the human entertains: its true atoms, how it differs from the truth, and the
+    agenda the human attributes to the robot there."""
+
+    atoms: tuple[str, ...]
+    true: tuple[str, ...]  # true here, false in reality
+    false: tuple[str, ...]  # false here, true in reality
+    robot_agenda: tuple[str, ...]
+
+    @property
+    def is_truth(self) -> bool:
+        return not self.true and not self.false
+
+
+@dataclass(frozen=True)
+class Step:
+    """One executed move: the states around it and the policy node it reached (None within
+    the opening). ``assessed`` holds the human's worlds just before situation assessment, when
+    it ran on this step."""
+
+    index: int
+    action: Action
+    before: EState
+    after: EState
+    node: PolicyNode | None
+    opening: bool
+    assessed: Worlds | None
+
+
+class _TracingSemantics(Semantics):
+    """The problem's semantics, remembering what situation assessment received, so a step can
+    say which worlds the human ruled out by looking."""
+
+    def __init__(self, g: Grounded) -> None:
+        super().__init__(g)
+        self.seen: dict[tuple[int, Worlds], Worlds] = {}
+
+    def assess(self, t: int, worlds: Worlds) -> Worlds:
+        out = super().assess(t, worlds)
+        self.seen.setdefault((t, out), worlds)
+        return out
+
+
+def _norm(label: str) -> str:
+    return "".join(label.split())
+
+
+class Executor:
+    """Follow ``policy`` (solved from ``problem`` when None) through one execution."""
+
+    def __init__(self, problem: Problem, policy: Policy | None = None) -> None:
+        if policy is None:
+            from ..search.planner import solve
+
+            result = solve(problem)
+            if result.policy is None:
+                raise ExecutionError(f"{problem.source}: no policy to execute: "
+                                     f"{result.reason or result.status}")
+            policy = result.policy
+        if tuple(policy.after) != tuple(problem.after):
+            raise PolicyMismatch(f"the policy was planned after the opening {list(policy.after)}"
+                                 f" but the problem's opening is {list(problem.after)}; "
+                                 "solve this problem again")
+        self.problem = problem
+        self.policy = policy
+        self.grounded = ground_problem(problem)
+        self.sem = _TracingSemantics(self.grounded)
+        self.robot_name, self.human_name = self.sem.names
+        self.state: EState = self.sem.initial()
+        self.initial_assessed = self.sem.seen.get((self.state.true, self.state.worlds))
+        self.history: list[Step] = []
+        self._opening = list(policy.after)
+        self.node: PolicyNode | None = None
+        if not self._opening:
+            self._enter_policy()
+
+    # -- where we are ---------------------------------------------------------------------------
+    @property
+    def in_opening(self) -> bool:
+        """True while the problem's fixed opening is being replayed."""
+        return self.node is None
+
+    @property
+    def done(self) -> bool:
+        """The policy has reached one of its leaves (a goal)."""
+        return self.node is not None and not self.node.children
+
+    @property
+    def goal_reached(self) -> bool:
+        return self.sem.is_goal(self.state)
+
+    @property
+    def to_move(self) -> str | None:
+        """The name of the agent to move, None when done."""
+        if self.done:
+            return None
+        return self.robot_name if self.state.turn == ROBOT else self.human_name
+
+    @property
+    def cost(self) -> Cost:
+        """Cost of the moves executed so far, the opening included."""
+        return sum((s.action.cost for s in self.history), 0)
+
+    # -- the robot ------------------------------------------------------------------------------
+    def next_robot_action(self) -> Action | None:
+        """What the robot must do now; None when it is the human's turn or the task is done."""
+        if self.done or self.state.turn != ROBOT:
+            return None
+        return self._action(self._robot_move())
+
+    def robot_action_done(self, label: str | None = None) -> Step:
+        """Record that the robot did its action (``label``, when given, is checked)."""
+        if self.done or self.state.turn != ROBOT:
+            raise ExecutionError(f"it is not {self.robot_name}'s turn: "
+                                 + ("the task is done" if self.done
+                                    else f"{self.human_name} is to move"))
+        move = self._robot_move()
+        if label is not None and _norm(self.strip_agent(label)) != _norm(move.label):
+            raise ExecutionError(f"{self.robot_name} reports {label!r} but the policy says "
+                                 f"{move.label}")
+        return self._advance(move)
+
+    # -- the human ------------------------------------------------------------------------------
+    def possible_human_moves(self) -> list[Move]:
+        """Every move the human model allows now (the semantics' view), policy or not."""
+        if self.done or self.state.turn != HUMAN:
+            return []
+        return self.sem.moves(self.state)
+
+    def expected_human_actions(self) -> list[Action]:
+        """The human moves the policy covers now (empty at the robot's turn or when done)."""
+        if self.done or self.state.turn != HUMAN:
+            return []
+        if self.node is None:
+            return [self._action(self._follow(self._opening[0]))]
+        by_label = {_norm(m.label): m for m in self.sem.moves(self.state)}
+        out = []
+        for c in self.policy.children(self.node):
+            m = by_label.get(_norm(c.action))
+            if m is None:
+                raise PolicyMismatch(f"policy node {c.id} has {self.human_name} "
+                                     f"{c.action}, which is not a move of {self.human_name} here")
+            out.append(self._action(m))
+        return out
+
+    def observe_human_action(self, action: str | Action) -> Step:
+        """Record what the human did (a label such as ``place(w, box2)``, ``ask(...)``,
+        ``pass``; the human's name may lead). Raises :class:`UncoveredHumanAction` when the
+        policy has no branch for it (nothing changes then)."""
+        if self.done or self.state.turn != HUMAN:
+            raise ExecutionError(f"it is not {self.human_name}'s turn: "
+                                 + ("the task is done" if self.done
+                                    else f"{self.robot_name} is to move"))
+        label = action.label if isinstance(action, Action) else self.strip_agent(action)
+        want = _norm(label)
+        moves = self.sem.moves(self.state)
+        possible = [m.label for m in moves]
+        expected = [a.label for a in self.expected_human_actions()]
+        who = self.human_name
+        move = next((m for m in moves if _norm(m.label) == want), None)
+        if move is None:
+            raise UncoveredHumanAction(label, expected, possible,
+                                       f"{who} did {label}, which is not a move of {who} here "
+                                       f"(the model allows {', '.join(possible)})")
+        if move.child is None:
+            raise UncoveredHumanAction(move.label, expected, possible,
+                                       f"{who} did {move.label}, which fails: {move.failure}")
+        if _norm(move.label) not in {_norm(e) for e in expected}:
+            where = ("the problem's fixed opening" if self.node is None
+                     else f"policy node {self.node.id}")
+            raise UncoveredHumanAction(move.label, expected, possible,
+                                       f"{who} did {move.label}, which {where} does not cover")
+        return self._advance(move)
+
+    # -- what the human believes ------------------------------------------------------------------
+    def human_worlds(self) -> list[WorldView]:
+        """The worlds the human entertains now, in the domain's vocabulary."""
+        g, t = self.grounded, self.state.true
+        return [WorldView(tuple(g.state_atoms(s)), tuple(g.mask_atoms(s & ~t)),
+                          tuple(g.mask_atoms(t & ~s)), tuple(self._agenda(ag)))
+                for s, ag in self.state.worlds]
+
+    def uncertain_atoms(self) -> list[str]:
+        """The atoms on which the human's worlds disagree."""
+        states = states_of(self.state.worlds)
+        m = 0
+        for s in states:
+            m |= s ^ states[0]
+        return self.grounded.mask_atoms(m)
+
+    def truth(self) -> list[str]:
+        """The atoms true now (the robot knows them)."""
+        return self.grounded.state_atoms(self.state.true)
+
+    def explain(self, step: Step) -> list[str]:
+        """What ``step`` changed, in the domain's vocabulary: the truth, co-presence, and how the
+        human's worlds were added, ruled out or told."""
+        g, sem = self.grounded, self.sem
+        R, H = self.robot_name, self.human_name
+        b, a, act = step.before, step.after, step.action
+        lines: list[str] = []
+        gained, lost = g.mask_atoms(a.true & ~b.true), g.mask_atoms(b.true & ~a.true)
+        if gained or lost:
+            parts = ([f"now true: {', '.join(gained)}"] if gained else []) + (
+                [f"no longer true: {', '.join(lost)}"] if lost else [])
+            lines.append("; ".join(parts))
+        n0 = len(b.worlds)
+        mid = step.assessed if step.assessed is not None else a.worlds
+        cop = sem.copresent(b.true)
+        if act.agent == R and act.kind in (ACTION, WAIT) and not cop:
+            if act.kind == ACTION or b.k < sem.K:
+                lines.append(f"{H} did not see it: imagining what {R} may have done meanwhile, "
+                             f"{H} goes from {n0} to {_worlds(len(mid))}")
+            else:
+                lines.append(f"{H} did not see it and imagines nothing more "
+                             f"({R} has had its K={sem.K} unseen turns)")
+        elif act.agent == R and act.kind == ACTION and len(mid) != n0:
+            lines.append(f"{H} saw it: {n0} -> {_worlds(len(mid))}")
+        elif act.kind == INFORM:
+            lines.append(f"{R} tells {H}: {', '.join(act.args)} ({n0} -> {_worlds(len(mid))})")
+        elif act.kind == ASK:
+            answer = self._answer(b, act.label)
+            said = "" if answer is None else f"; {R} answers {'yes' if answer else 'no'}"
+            lines.append(f"{H} asks whether {act.args[0]}{said} ({n0} -> {_worlds(len(mid))})")
+        if step.assessed is not None and step.assessed != a.worlds:
+            lines.append(self._assessment(a.true, step.assessed, a.worlds))
+        if sem.copresent(a.true) != cop:
+            lines.append(f"{H} and {R} are now " + ("together" if sem.copresent(a.true)
+                                                     else "apart"))
+        if not sem.copresent(a.true) and a.k != b.k:
+            lines.append(f"{R} has had {a.k} of its K={sem.K} turns unseen by {H}")
+        lines.extend(self.belief_lines(a))
+        return lines
+
+    def start_lines(self) -> list[str]:
+        """The situation before the first move."""
+        es, sem = self.state, self.sem
+        R, H = self.robot_name, self.human_name
+        lines = [f"{H} and {R} are " + ("together" if sem.copresent(es.true) else "apart")]
+        if self.initial_assessed is not None and self.initial_assessed != es.worlds:
+            lines.append(self._assessment(es.true, self.initial_assessed, es.worlds))
+        return lines + self.belief_lines(es)
+
+    def belief_lines(self, es: EState | None = None) -> list[str]:
+        """What each agent believes in ``es`` (default: now)."""
+        es = self.state if es is None else es
+        g, t = self.grounded, es.true
+        R, H = self.robot_name, self.human_name
+        ws = es.worlds
+        head = f"{R} knows the truth; {H} now entertains {_worlds(len(ws))}"
+        if len(ws) == 1 and ws[0][0] == t and ws[0][1] == es.robot_agenda:
+            return [head + ": the truth"]
+        states = states_of(ws)
+        m = 0
+        for s in states:
+            m |= s ^ states[0]
+        differ = g.mask_atoms(m)
+        if len({ag for _, ag in ws}) > 1:
+            differ.append(f"{R}'s agenda")
+        if differ:
+            head += f"; they differ on {', '.join(differ)}"
+        if all(s != t for s in states):
+            head += "; none of them is the truth"
+        lines = [head + ":"]
+        for i, (s, ag) in enumerate(ws[:MAX_WORLDS_LISTED], 1):
+            lits = g.mask_atoms(s & ~t) + [f"not {x}" for x in g.mask_atoms(t & ~s)]
+            text = f"differs from the truth: {', '.join(lits)}" if lits else "the true state"
+            if ag != es.robot_agenda:
+                text += f"; {H} thinks {R} still has to do: " + (
+                    ", ".join(self._agenda(ag)) or "nothing")
+            lines.append(f"  world {i}: {text}")
+        if len(ws) > MAX_WORLDS_LISTED:
+            lines.append(f"  ... and {len(ws) - MAX_WORLDS_LISTED} more")
+        return lines
+
+    # -- internals ------------------------------------------------------------------------------
+    def strip_agent(self, label: str) -> str:
+        """Drop a leading agent name (``H place(w, box2)`` -> ``place(w, box2)``)."""
+        head, _, rest = label.strip().partition(" ")
+        return rest.strip() if rest and head in (self.robot_name, self.human_name) else label
+
+    def _follow(self, label: str) -> Move:
+        try:
+            return self.sem.follow(self.state, label)
+        except ValueError as e:
+            raise PolicyMismatch(f"the problem's opening step {label!r} cannot be played: {e}"
+                                 ) from None
+
+    def _robot_move(self) -> Move:
+        if self.node is None:
+            return self._follow(self._opening[0])
+        kids = self.policy.children(self.node)
+        if len(kids) != 1:
+            raise PolicyMismatch(f"policy node {self.node.id} is a robot node with "
+                                 f"{len(kids)} children, not 1")
+        label = kids[0].action
+        move = next((m for m in self.sem.moves(self.state) if _norm(m.label) == _norm(label)),
+                    None)
+        if move is None or move.child is None:
+            raise PolicyMismatch(f"policy node {kids[0].id} says {self.robot_name} {label}, "
+                                 f"which is not a move of {self.robot_name} here; "
+                                 "the policy does not fit this problem")
+        return move
+
+    def _advance(self, move: Move) -> Step:
+        assert move.child is not None
+        before = self.state
+        assessed = self.sem.seen.get((move.child.true, move.child.worlds))
+        self.sem.seen.clear()  # only the chosen move's assessment matters
+        self.state = move.child
+        opening = self.node is None
+        node: PolicyNode | None = None
+        if opening:
+            self._opening.pop(0)
+            if not self._opening:
+                self._enter_policy()
+                node = self.node
+        else:
+            assert self.node is not None
+            node = next(c for c in self.policy.children(self.node)
+                        if _norm(c.action) == _norm(move.label))
+            self.node = node
+            self._check(node)
+        step = Step(len(self.history) + 1, self._action(move), before, self.state, node,
+                    opening, assessed if assessed != self.state.worlds else None)
+        self.history.append(step)
+        return step
+
+    def _enter_policy(self) -> None:
+        self.node = self.policy.root
+        self._check(self.node)
+
+    def _check(self, node: PolicyNode) -> None:
+        """The policy node and the tracked epistemic state must describe the same situation."""
+        es, sem = self.state, self.sem
+        names = self.sem.names
+        want = {"state": self.grounded.state_atoms(es.true), "worlds": len(es.worlds), "k": es.k,
+                "copresent": sem.copresent(es.true),
+                "to_move": None if node.goal else names[es.turn]}
+        got = {"state": node.state, "worlds": node.worlds, "k": node.k,
+               "copresent": node.copresent, "to_move": node.to_move}
+        bad = [k for k in want if want[k] != got[k]]
+        if node.goal and not sem.is_goal(es):
+            bad.append("goal")
+        if bad:
+            raise PolicyMismatch(f"policy node {node.id} disagrees with the problem's semantics "
+                                 f"on {', '.join(bad)} (policy {[got.get(k) for k in bad]}, "
+                                 f"semantics {[want.get(k, False) for k in bad]}); "
+                                 "the policy does not fit this problem, solve it again")
+
+    def _action(self, m: Move) -> Action:
+        g = self.grounded
+        agent = self.sem.names[m.agent]
+        if m.op >= 0:
+            op = (g.robot.ops if m.agent == ROBOT else g.human.ops)[m.op]
+            name, args = op.schema, tuple(op.args)
+        elif m.kind == INFORM:
+            t = self.state.true
+            name = INFORM
+            args = tuple(g.atoms[i] if t >> i & 1 else f"not {g.atoms[i]}"
+                         for i in bits_of(m.atoms))
+        elif m.kind == ASK:
+            name, args = ASK, (m.label[len("ask("):-1],)
+        else:
+            name, args = m.kind, ()
+        return Action(agent, m.kind, m.label, name, args, m.cost)
+
+    def _agenda(self, ag: tuple[int, ...]) -> list[str]:
+        return [self.grounded.task_names[t] for t in ag if t != FINISH]
+
+    def _answer(self, es: EState, label: str) -> bool | None:
+        """The truthful answer to the human's question ``label`` in ``es``."""
+        sem = self.sem
+        states = states_of(es.worlds)
+        full = (1 << len(states)) - 1
+        for u in sem.H.refine_in_all(es.human_agenda, states):
+            if u.worlds != full and u.conds:
+                phi = sem.uncertain_part(conj(*u.conds), states)
+                if f"ask({sem.show(phi)})" == label:
+                    return bool(sem.g.compile(phi)(es.true))
+        return None
+
+    def _assessment(self, t: int, pre: Worlds, post: Worlds) -> str:
+        g, H = self.grounded, self.human_name
+        vis = self.sem.visible(t)
+        removed = [w for w in pre if w not in post]
+        m = 0
+        for s, _ in removed:
+            m |= (s ^ t) & vis
+        seen = ", ".join(g.atoms[i] if t >> i & 1 else f"not {g.atoms[i]}" for i in bits_of(m))
+        if set(post) <= set(pre):
+            return (f"situation assessment: {H} sees {seen or 'the scene'}, which rules out "
+                    f"{_worlds(len(removed))} ({len(pre)} -> {len(post)})")
+        return (f"situation assessment: no world fits what {H} sees ({seen}); {H} revises its "
+                f"worlds ({len(pre)} -> {len(post)})")
+
+
+def _worlds(n: int) -> str:
+    return f"{n} world" + ("" if n == 1 else "s")
+
+
+__all__ = ["Action", "ExecutionError", "Executor", "PolicyMismatch", "Step",
+           "UncoveredHumanAction", "WorldView"]
