@@ -1,0 +1,376 @@
+"""The ``ehatp`` command line: solve, show, validate, bench (render and simulate plug in).
+
+Exit codes: 0 success, 1 no policy (or an invalid one, or an unsolved benchmark row), 2 bad
+input. Bad input is always one line on stderr, ``FILE:PLACE: problem; fix``, never a traceback.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated, Any, NoReturn
+
+import typer
+from rich.console import Console
+from rich.live import Live
+from rich.text import Text
+
+from .. import __version__
+from ..errors import EhatpError, InputError
+from ..model.domain import DomainError
+from ..model.problem import Problem, load
+from ..search.andor import Stats
+from ..search.planner import Result, solve
+from ..search.policy import Policy
+from . import bench as bench_mod
+from .show import fmt_cost, plain, policy_lines, print_rich, read_policy
+
+app = typer.Typer(
+    name="ehatp",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_show_locals=False,
+    rich_markup_mode="markdown",  # reflows docstring paragraphs in --help
+)
+bench_app = typer.Typer(help="Re-run the paper's benchmarks and compare with its figures.",
+                        no_args_is_help=True)
+app.add_typer(bench_app, name="bench")
+
+EXIT_OK, EXIT_NO_POLICY, EXIT_BAD_INPUT = 0, 1, 2
+SHOW_PROGRESS_AFTER_S = 0.5  # quick solves never flash a progress line
+
+
+# --- errors ----------------------------------------------------------------------------------
+
+
+def die(message: str, code: int = EXIT_BAD_INPUT) -> NoReturn:
+    """One line on stderr, then exit; newlines are folded so the promise of one line holds."""
+    typer.echo(f"error: {' '.join(message.split())}", err=True)
+    raise typer.Exit(code)
+
+
+@contextmanager
+def user_errors(file: Path) -> Iterator[None]:
+    """Turn the errors a user can cause with ``file`` into one line and exit code 2."""
+    try:
+        yield
+    except InputError as e:
+        die(e.line())
+    except DomainError as e:
+        die(f"{file}: the domain is malformed: {e}; fix the domain definition")
+    except EhatpError as e:
+        die(f"{file}: {e}")
+
+
+def load_problem(path: Path) -> Problem:
+    with user_errors(path):
+        return load(path)
+    raise AssertionError  # unreachable: user_errors exits; keeps type checkers content
+
+
+def load_policy(path: Path) -> Policy:
+    with user_errors(path):
+        return read_policy(path)
+    raise AssertionError
+
+
+def stderr_console() -> Console | None:
+    """A console for live progress, or None when stderr is not a terminal (stay quiet)."""
+    return Console(stderr=True) if sys.stderr.isatty() else None
+
+
+# --- progress --------------------------------------------------------------------------------
+
+
+class LiveProgress:
+    """Search progress on the terminal (states/s, worlds, elapsed), cleared when done."""
+
+    def __init__(self, console: Console, label: str) -> None:
+        self.console, self.label = console, label
+        self.live: Live | None = None
+
+    def __call__(self, stats: Stats, frontier: int) -> None:
+        if stats.time_s < SHOW_PROGRESS_AFTER_S:
+            return
+        text = self.render(stats, frontier)
+        if self.live is None:
+            self.live = Live(text, console=self.console, transient=True, refresh_per_second=4,
+                             redirect_stdout=False, redirect_stderr=False)
+            self.live.start()
+        else:
+            self.live.update(text)
+
+    def render(self, stats: Stats, frontier: int) -> Text:
+        rate = stats.generated / stats.time_s if stats.time_s else 0.0
+        return Text.assemble(
+            (f"{self.label} ", "bold"),
+            f"{stats.generated:,} states ({stats.distinct:,} distinct) · ",
+            (f"{rate:,.0f} states/s", "cyan"),
+            f" · |W| ≤ {stats.max_worlds} · frontier {frontier:,} · {stats.time_s:.1f} s")
+
+    def close(self) -> None:
+        if self.live is not None:
+            self.live.stop()
+            self.live = None
+
+
+# --- version and top level -------------------------------------------------------------------
+
+
+def _version(value: bool) -> None:
+    if value:
+        typer.echo(f"ehatp {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: Annotated[bool, typer.Option(
+        "--version", callback=_version, is_eager=True,
+        help="Print the version and exit.")] = False,
+) -> None:
+    """Epistemic Human-Aware Task Planner: plan robot policies that account for what the human
+    sees, believes and may be told.
+
+    Typical use: `ehatp solve problem.toml --out policy.json`, then `ehatp show policy.json`
+    and `ehatp validate problem.toml policy.json`. Exit codes: 0 ok, 1 no (valid) policy,
+    2 bad input.
+    """
+
+
+# --- solve -----------------------------------------------------------------------------------
+
+
+@app.command("solve")
+def solve_cmd(
+    problem: Annotated[Path, typer.Argument(
+        help="Problem file (TOML), e.g. examples/cubes/p1.toml.", metavar="PROBLEM.toml",
+        show_default=False)],
+    out: Annotated[Path | None, typer.Option(
+        "--out", "-o", help="Where to write the policy JSON (default: PROBLEM-NAME.policy.json "
+                            "in the current directory).", show_default=False)] = None,
+    timeout: Annotated[float | None, typer.Option(
+        "--timeout", min=0.0, help="Stop searching after this many seconds (default: the "
+                                   "problem's limits.timeout, else none).",
+        show_default=False)] = None,
+    max_states: Annotated[int | None, typer.Option(
+        "--max-states", min=1, help="Stop after this many distinct states (default: the "
+                                    "problem's limits.max_states).",
+        show_default=False)] = None,
+    max_depth: Annotated[int | None, typer.Option(
+        "--max-depth", min=1, help="Treat states deeper than this as dead ends (default: the "
+                                   "problem's limits.max_depth).",
+        show_default=False)] = None,
+) -> None:
+    """Plan a worst-case-optimal robot policy and write it as JSON.
+
+    Prints a summary: solved or why not, states generated/distinct, the largest number of
+    worlds the human entertains (|W|), leaves, worst-case cost, communications and time.
+    Exit 0 solved; 1 no policy exists or a limit stopped the search (the best policy found so
+    far is still written, marked not optimal); 2 bad input.
+    """
+    prob = load_problem(problem)
+    console = stderr_console()
+    live = LiveProgress(console, prob.name) if console is not None else None
+    t0 = time.perf_counter()
+    try:
+        with user_errors(problem):
+            result = solve(prob, timeout=timeout, max_states=max_states, max_depth=max_depth,
+                           progress=live)
+    finally:
+        if live is not None:
+            live.close()
+    wall_ms = (time.perf_counter() - t0) * 1000
+    target = out if out is not None else Path(f"{problem.stem}.policy.json")
+    written = False
+    if result.policy is not None:
+        try:
+            result.policy.write(target)
+        except OSError as e:
+            die(f"{target}: cannot write the policy ({e.strerror or e}); choose another --out")
+        written = True
+    _summary(prob, result, wall_ms, target if written else None)
+    raise typer.Exit(EXIT_OK if result.status == "solved" else EXIT_NO_POLICY)
+
+
+def _summary(prob: Problem, result: Result, wall_ms: float, written: Path | None) -> None:
+    st = result.stats
+    if result.status == "solved":
+        typer.secho(f"{prob.name}: solved (optimal policy found)", fg="green", bold=True)
+    elif result.status == "unsolvable":
+        typer.secho(f"{prob.name}: {result.reason}", fg="red", bold=True)
+    else:
+        typer.secho(f"{prob.name}: stopped early, {result.reason}; partial statistics:",
+                    fg="yellow", bold=True)
+    rows: list[tuple[str, Any]] = [
+        ("states", f"{st.get('generated', 0):,} generated, {st.get('distinct', 0):,} distinct, "
+                   f"{st.get('expanded', 0):,} expanded"),
+        ("|W|", f"{st.get('max_worlds', 0)} (most worlds the human entertains at once)"),
+    ]
+    pol = result.policy
+    if pol is not None:
+        rows += [("leaves", pol.leaves), ("cost", f"{fmt_cost(pol.cost)} (worst case)"),
+                 ("communications", pol.communications)]
+    rows.append(("time", f"{st.get('time_ms', 0):,} ms search, {wall_ms:,.1f} ms in all"))
+    if written is not None:
+        note = "" if result.status == "solved" else " (best found so far, NOT proven optimal)"
+        rows.append(("policy", f"written to {written}{note}"))
+    elif result.status != "unsolvable":
+        rows.append(("policy", "none found before the search stopped"))
+    for k, v in rows:
+        typer.echo(f"  {k:<15} {v}")
+
+
+# --- show ------------------------------------------------------------------------------------
+
+
+@app.command("show")
+def show_cmd(
+    policy: Annotated[Path, typer.Argument(
+        help="Policy JSON written by `ehatp solve`.", metavar="POLICY.json",
+        show_default=False)],
+    tree: Annotated[bool, typer.Option(
+        "--tree/--no-tree", help="Print the policy tree.")] = True,
+    timelines: Annotated[bool, typer.Option(
+        "--timelines/--no-timelines", help="Print each branch's timeline.")] = True,
+    details: Annotated[bool, typer.Option(
+        "--details", "-d", help="Under each tree node, list what the human is unsure about "
+                                "and the K-counter.")] = False,
+) -> None:
+    """Print a policy as an indented tree and as one timeline per branch.
+
+    Tree: each line is one step (node number, agent, action, W = worlds the human entertains;
+    marks apart, COMM for a communication, GOAL). Straight runs stay at one indent; the tree
+    forks only where the human chooses. Timelines: turns while the agents are together,
+    parallel lanes while they are apart. Colour on a terminal, plain text in a pipe.
+    """
+    pol = load_policy(policy)
+    lines = policy_lines(pol, tree=tree, timelines=timelines, details=details)
+    if sys.stdout.isatty():
+        print_rich(lines, Console())
+    else:
+        typer.echo(plain(lines), nl=False)
+
+
+# --- validate --------------------------------------------------------------------------------
+
+
+@app.command("validate")
+def validate_cmd(
+    problem: Annotated[Path, typer.Argument(
+        help="Problem file (TOML).", metavar="PROBLEM.toml", show_default=False)],
+    policy: Annotated[Path, typer.Argument(
+        help="Policy JSON to check against the problem.", metavar="POLICY.json",
+        show_default=False)],
+) -> None:
+    """Check a policy against a problem with the independent validator.
+
+    Exit 0 only if the policy is valid; otherwise print the first violation and exit 1
+    (2 on unreadable input).
+    """
+    import ehatp  # the package-level validate(), so the validator loads only when needed
+
+    prob = load_problem(problem)
+    pol = load_policy(policy)
+    if pol.problem != prob.name:  # legal to check, but most likely the wrong pair of files
+        typer.echo(f"note: {policy} was planned for {pol.problem!r}, not {prob.name!r}",
+                   err=True)
+    with user_errors(policy):
+        report = ehatp.validate(prob, pol)
+    if report.ok:
+        typer.secho(f"valid: {policy} is a valid policy for {prob.name}", fg="green")
+        raise typer.Exit(EXIT_OK)
+    typer.secho(f"invalid: {report.message}", fg="red")
+    raise typer.Exit(EXIT_NO_POLICY)
+
+
+# --- bench -----------------------------------------------------------------------------------
+
+
+@bench_app.command("table1")
+def bench_table1(
+    json_out: Annotated[Path | None, typer.Option(
+        "--json", help="Also write the rows as JSON to this file ('-' for stdout, which then "
+                       "replaces the table).", show_default=False)] = None,
+    repeat: Annotated[int, typer.Option(
+        "--repeat", "-n", min=1, help="Runs per instance; the best time is kept.")] = 3,
+    only: Annotated[list[str] | None, typer.Option(
+        "--only", metavar="NAME",
+        help="Run just this instance (repeatable), e.g. --only P3 --only 'Cooking 1'.",
+        show_default=False)] = None,
+) -> None:
+    """Solve the nine Table 1 instances (P1-P6, Cooking 1-3) and compare with the paper.
+
+    Shows our states, |W|, leaves and time beside the paper's, and the speed-up against the
+    authors' prototype with its tree copying removed (the headline) and against the published
+    times. Exit 1 if an instance is missing or not solved.
+    """
+    if only:
+        known = {bench_mod.instance_key(r.instance) for r in bench_mod.TABLE1}
+        unknown = [o for o in only if bench_mod.instance_key(o) not in known]
+        if unknown:
+            names = ", ".join(r.instance for r in bench_mod.TABLE1)
+            die(f"--only {unknown[0]}: no such Table 1 instance; use one of {names}")
+    console = stderr_console()
+    status = console.status("") if console is not None else None
+
+    def notify(inst: str, run: int, runs: int) -> None:
+        if status is not None:
+            status.update(f"solving {inst} (run {run}/{runs})")
+
+    if status is not None:
+        status.start()
+    try:
+        rows = bench_mod.run_table1(repeat, notify, only)
+    finally:
+        if status is not None:
+            status.stop()
+    if json_out is not None:
+        data = json.dumps(rows, indent=1) + "\n"
+        if str(json_out) == "-":
+            typer.echo(data, nl=False)
+        else:
+            try:
+                json_out.write_text(data, encoding="utf-8")
+            except OSError as e:
+                die(f"{json_out}: cannot write ({e.strerror or e}); choose another --json file")
+    if str(json_out) != "-":
+        con = Console() if sys.stdout.isatty() else None
+        table = bench_mod.rich_table(rows)
+        # a crushed table is worse than a wrapped plain one on a narrow terminal
+        if con is not None and _fits(con, table):
+            con.print(table)
+        else:
+            typer.echo(bench_mod.format_table(rows), nl=False)
+    failed = [r for r in rows if not r["solved"]]
+    for r in failed:
+        typer.echo(f"not solved: {r['instance']}: {r['error']}", err=True)
+    raise typer.Exit(EXIT_NO_POLICY if failed else EXIT_OK)
+
+
+def _fits(con: Console, table: Any) -> bool:
+    # measure against a huge width: measuring against the console's own width always fits
+    return con.measure(table, options=con.options.update_width(10_000)).maximum <= con.width
+
+
+# --- entry point -----------------------------------------------------------------------------
+
+
+def main() -> None:
+    """Console entry point (``ehatp``)."""
+    app(prog_name="ehatp")
+
+
+# Other commands live in their own modules and add themselves; imported last so they may
+# import helpers from this module without a circular-import failure.
+from . import render, simulate  # noqa: E402
+
+render.register(app)
+simulate.register(app)
+
+if __name__ == "__main__":
+    main()
