@@ -1,0 +1,335 @@
+"""`ehatp render`: DOT/SVG drawings, collapsing, and the offline HTML explorer in a real browser."""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import graphviz
+import pytest
+import typer
+from typer.testing import CliRunner
+
+import ehatp
+from ehatp.search.policy import Policy
+from ehatp.tools import render as rd
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples" / "cubes"
+NAMES = ["p1", "p2", "p3", "p4", "p5", "p6"]
+NODE_STMT = re.compile(r"^\s*n(\d+) \[", re.M)
+EDGE_STMT = re.compile(r"^\s*n(\d+) -> n(\d+)", re.M)
+
+
+@pytest.fixture(scope="module")
+def policy_files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    out = tmp_path_factory.mktemp("policies")
+    files = {}
+    for name in NAMES:
+        path = out / f"{name}.json"
+        ehatp.solve(ehatp.load(EXAMPLES / f"{name}.toml")).policy.write(path)
+        files[name] = path
+    return files
+
+
+def cli() -> typer.Typer:
+    app = typer.Typer()
+
+    @app.callback()
+    def _main() -> None:  # a callback keeps `render` a subcommand, as in the real CLI
+        pass
+
+    rd.register(app)
+    return app
+
+
+def run(*args: str) -> Any:
+    return CliRunner().invoke(cli(), ["render", *map(str, args)])
+
+
+# --------------------------------------------------------------------------- DOT
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_dot_has_one_node_per_policy_node(policy_files: dict[str, Path], name: str) -> None:
+    policy = Policy.read(policy_files[name])
+    text, notes = rd.render(policy_files[name], rd.Format.dot)
+    assert notes == []  # every shipped example fits the default budget
+    graphviz.Source(text)  # accepted by the graphviz package
+    ids = [int(i) for i in NODE_STMT.findall(text)]
+    assert sorted(ids) == list(range(len(policy.nodes)))
+    edges = {(int(a), int(b)) for a, b in EDGE_STMT.findall(text)}
+    assert edges == {(n.id, c) for n in policy.nodes for c in n.children}
+    assert "collapsed" not in text
+    if shutil.which("dot"):
+        # let Graphviz itself parse it: `plain` output lists one `node` line per node
+        plain = subprocess.run(["dot", "-Tplain"], input=text, capture_output=True, text=True,
+                               check=True).stdout
+        assert sum(line.startswith("node ") for line in plain.splitlines()) == len(policy.nodes)
+
+
+def test_dot_styles_tell_kinds_apart(policy_files: dict[str, Path]) -> None:
+    policy = Policy.read(policy_files["p4"])
+    text, _ = rd.render(policy_files["p4"], rd.Format.dot)
+    lines = {int(m.group(1)): m.string[m.start():m.string.index("\n", m.start())]
+             for m in NODE_STMT.finditer(text)}
+    human = policy.agents["human"]
+    seen = set()
+    for n in policy.nodes:
+        line = lines[n.id]
+        assert f"{n.worlds} world" in line  # every node shows how many worlds
+        assert n.action in line
+        if n.kind in ("inform", "ask"):
+            assert "shape=hexagon" in line
+            seen.add("comm")
+        elif n.kind == "action":
+            assert ("shape=ellipse" if n.agent == human else "shape=box") in line
+            seen.add(n.agent)
+        assert ("peripheries=2" in line) == n.goal
+    assert seen == {"comm", *policy.agents.values()}
+
+
+def test_share_identical_subtrees(policy_files: dict[str, Path]) -> None:
+    policy = Policy.read(policy_files["p4"])
+    hashes = rd.subtree_hashes(policy)
+    view = rd.plan_view(policy, max_nodes=None, share=True)
+    assert len(view.nodes) == len(set(hashes)) < len(policy.nodes)
+    # every policy node is drawn through a node with the very same subtree
+    assert {hashes[i] for i in view.nodes} == set(hashes)
+    assert any("identical subtrees" in note for note in view.notes)
+    assert any(k > 1 for k in view.stands_for.values())
+    text = rd.to_dot(policy, view).source
+    assert len(NODE_STMT.findall(text)) == len(view.nodes)
+    assert "collapsed: identical subtrees" in text  # the note is in the graph label
+    # a shared node has several parents
+    parents: dict[int, int] = {}
+    for _, b in view.edges:
+        parents[b] = parents.get(b, 0) + 1
+    assert max(parents.values()) > 1
+
+
+def test_over_budget_collapses_and_says_so(policy_files: dict[str, Path]) -> None:
+    result = run(policy_files["p4"], "--max-nodes", "100")
+    assert result.exit_code == 0, result.output
+    assert "collapsed: identical subtrees" in result.stderr
+    assert "collapsed: identical subtrees" in result.stdout
+    assert len(NODE_STMT.findall(result.stdout)) <= 100
+
+
+def test_depth_cap_folds_into_stubs(policy_files: dict[str, Path]) -> None:
+    policy = Policy.read(policy_files["p3"])
+    view = rd.plan_view(policy, max_depth=3, max_nodes=None, share=False)
+    assert view.folded and any("depth 3" in note for note in view.notes)
+    assert len(view.nodes) + sum(view.folded.values()) == len(policy.nodes)
+    text = rd.to_dot(policy, view).source
+    assert len(re.findall(r"^\s*more\d+ \[", text, re.M)) == len(view.folded)
+    result = run(policy_files["p3"], "--max-depth", "3")
+    assert result.exit_code == 0 and "cut at depth 3" in result.stderr
+
+
+def test_node_budget_keeps_siblings_together(policy_files: dict[str, Path]) -> None:
+    policy = Policy.read(policy_files["p6"])
+    view = rd.plan_view(policy, max_nodes=25, share=False)
+    assert len(view.nodes) <= 25
+    assert len(view.nodes) + sum(view.folded.values()) == len(policy.nodes)
+    drawn = set(view.nodes)
+    for i in drawn:
+        kids = set(policy.nodes[i].children)
+        assert kids <= drawn or (i in view.folded and not kids & drawn)
+
+
+# --------------------------------------------------------------------------- SVG and errors
+
+
+def test_svg_through_dot(policy_files: dict[str, Path], tmp_path: Path) -> None:
+    if not shutil.which("dot"):
+        pytest.skip("Graphviz's dot is not installed")
+    out = tmp_path / "p2.svg"
+    result = run(policy_files["p2"], "--format", "svg", "--out", out)
+    assert result.exit_code == 0, result.output
+    svg = out.read_text(encoding="utf-8")
+    assert "<svg" in svg and 'id="policy_node_0"' in svg
+
+
+def test_svg_without_dot_says_how_to_install(policy_files: dict[str, Path],
+                                             monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(rd.shutil, "which", lambda _name: None)
+    result = run(policy_files["p2"], "--format", "svg")
+    assert result.exit_code == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "install Graphviz" in lines[0]
+
+
+def test_bad_input_is_one_line_exit_2(tmp_path: Path) -> None:
+    missing = tmp_path / "nope.json"
+    broken = tmp_path / "broken.json"
+    broken.write_text("{not json", encoding="utf-8")
+    other = tmp_path / "other.json"
+    other.write_text(json.dumps({"format": "something-else"}), encoding="utf-8")
+    for path, what in [(missing, "no such file"), (broken, "not valid JSON"),
+                       (other, "not an ehatp policy")]:
+        result = run(path)
+        assert result.exit_code == 2
+        lines = result.stderr.strip().splitlines()
+        assert len(lines) == 1, lines
+        assert str(path) in lines[0] and what in lines[0] and "ehatp solve" in lines[0]
+
+
+def test_cyclic_children_are_rejected(policy_files: dict[str, Path], tmp_path: Path) -> None:
+    data = json.loads(policy_files["p1"].read_text(encoding="utf-8"))
+    data["nodes"][1]["children"].append(0)
+    bad = tmp_path / "cyclic.json"
+    bad.write_text(json.dumps(data), encoding="utf-8")
+    result = run(bad)
+    assert result.exit_code == 2 and "children" in result.stderr
+
+
+# --------------------------------------------------------------------------- HTML
+
+
+FETCHING = [
+    re.compile(r"https?:", re.I),  # simplest: no absolute URL at all
+    re.compile(r"<\w[^>]*\s(src|href|srcset|action|formaction|poster|data)\s*=", re.I),
+    re.compile(r"\.(src|href)\s*=|setAttribute\(\s*[\"'](src|href)", re.I),
+    re.compile(r"url\s*\(", re.I),
+    re.compile(r"@import|\bimport\s*\(|\bimport\s+[\w{*'\"]", re.I),
+    re.compile(r"\bfetch\s*\(|XMLHttpRequest|WebSocket|EventSource|sendBeacon", re.I),
+    re.compile(r"<(link|iframe|img|object|embed|base)\b", re.I),
+]
+
+
+def embedded(html: str, element_id: str) -> Any:
+    m = re.search(rf'<script type="application/json" id="{element_id}">(.*?)</script>', html,
+                  re.S)
+    assert m, element_id
+    return json.loads(m.group(1))
+
+
+@pytest.mark.parametrize("name", ["p2", "p4"])
+def test_html_is_self_contained(policy_files: dict[str, Path], name: str) -> None:
+    html, _ = rd.render(policy_files[name], rd.Format.html)
+    for pattern in FETCHING:
+        assert not pattern.search(html), pattern.pattern
+    assert embedded(html, "policy-data") == json.loads(policy_files[name].read_text("utf-8"))
+    assert "Content-Security-Policy" in html and "default-src 'none'" in html
+
+
+def test_html_survives_hostile_strings(policy_files: dict[str, Path], tmp_path: Path) -> None:
+    data = json.loads(policy_files["p1"].read_text(encoding="utf-8"))
+    data["problem"] = "</script><script>alert(1)</script> see https://example.org/x.js"
+    path = tmp_path / "hostile.json"
+    path.write_text(json.dumps(data), encoding="utf-8")
+    html, _ = rd.render(path, rd.Format.html)
+    assert html.count("</script>") == 3  # policy data, config, code
+    assert not re.search(r"https?:", html)
+    assert embedded(html, "policy-data")["problem"] == data["problem"]
+
+
+def test_explorer_assets_are_package_data() -> None:
+    # the wheel ships src/ehatp as a whole, so the explorer files only need to sit in it
+    here = Path(rd.__file__).parent / "explorer"
+    assert {p.name for p in here.iterdir()} >= {"explorer.html", "explorer.css", "explorer.js"}
+
+
+# --------------------------------------------------------------------------- real browser
+
+
+def _chromium() -> tuple[str, str]:
+    browser = next((p for p in map(shutil.which, ["chromium", "chromium-browser"]) if p), None)
+    driver = shutil.which("chromedriver") or (
+        "/usr/bin/chromedriver" if Path("/usr/bin/chromedriver").exists() else None)
+    if browser is None or driver is None:
+        pytest.skip("chromium and chromedriver are not installed "
+                    "(apt-get install chromium chromium-driver)")
+    return browser, driver
+
+
+@pytest.fixture
+def browser(monkeypatch: pytest.MonkeyPatch) -> Iterator[Any]:
+    binary, driver_path = _chromium()
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    monkeypatch.setenv("SE_OFFLINE", "true")  # Selenium Manager must not download anything
+    options = webdriver.ChromeOptions()
+    options.binary_location = binary
+    profile = tempfile.mkdtemp(prefix="ehatp-chromium-")
+    for arg in ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+                "--no-first-run", "--disable-background-networking",
+                "--disable-component-update", "--disable-sync", "--window-size=1400,1000",
+                f"--user-data-dir={profile}"]:
+        options.add_argument(arg)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    driver = webdriver.Chrome(service=Service(executable_path=driver_path), options=options)
+    try:
+        yield driver
+    finally:
+        driver.quit()
+        shutil.rmtree(profile, ignore_errors=True)
+
+
+def test_click_node_and_read_world_table(policy_files: dict[str, Path], tmp_path: Path,
+                                         browser: Any) -> None:
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    policy = Policy.read(policy_files["p4"])
+    page = tmp_path / "p4.html"
+    assert run(policy_files["p4"], "--format", "html", "--out", page).exit_code == 0
+    browser.get(page.as_uri())
+    WebDriverWait(browser, 10).until(
+        lambda d: d.find_element(By.TAG_NAME, "body").get_attribute("data-ready") == "true")
+    assert len(browser.find_elements(By.CSS_SELECTOR, "[data-node-id]")) == len(policy.nodes)
+
+    # a node where the human cannot tell several worlds apart
+    node = max(policy.nodes, key=lambda n: (n.worlds, -n.id))
+    assert node.worlds > 1
+    browser.find_element(By.CSS_SELECTOR, f'[data-node-id="{node.id}"]').click()
+    table = browser.find_element(By.ID, "world-table")
+    atoms = [th.get_attribute("data-atom")
+             for th in table.find_elements(By.CSS_SELECTOR, "thead th[data-atom]")]
+    expected_atoms = sorted({a for d in node.world_diffs for a in d["true"] + d["false"]})
+    assert atoms == expected_atoms
+    rows = table.find_elements(By.CSS_SELECTOR, "tbody tr[data-world]")
+    assert [r.get_attribute("data-world") for r in rows] == [
+        "truth", *map(str, range(1, node.worlds + 1))]
+    truth = set(node.state)
+    for row, diff in zip(rows[1:], node.world_diffs, strict=True):
+        cells = row.find_elements(By.CSS_SELECTOR, "td[data-atom]")
+        got = {c.get_attribute("data-atom"): c.text for c in cells}
+        want = {a: "T" if (a in diff["true"] or (a in truth and a not in diff["false"]))
+                else "F" for a in expected_atoms}
+        assert got == want
+    assert browser.find_element(By.ID, "fact-k").text.startswith(str(node.k))
+    assert browser.find_element(By.ID, "fact-worlds").text == str(node.worlds)
+    assert browser.find_element(By.ID, "fact-cost").text == str(node.cost)
+    assert browser.find_element(By.ID, "fact-action").text.startswith(node.action)
+    copresent = browser.find_element(By.ID, "fact-copresent").text
+    assert copresent.startswith("together" if node.copresent else "apart")
+    assert f"node={node.id}" in browser.current_url
+
+    # the branch through it, as a timeline with parallel lanes while the agents are apart
+    lanes = browser.find_elements(By.CSS_SELECTOR, "#timeline .tl-parallel .tl-lane")
+    assert {lane.get_attribute("data-agent") for lane in lanes} == set(policy.agents.values())
+    current = browser.find_element(By.CSS_SELECTOR, "#timeline .tl-step.current")
+    assert current.get_attribute("data-step-node") == str(node.id)
+
+    # fold and unfold the whole tree at the root
+    browser.find_element(By.CSS_SELECTOR, '[data-toggle-id="0"]').click()
+    assert len(browser.find_elements(By.CSS_SELECTOR, "[data-node-id]")) == 1
+    browser.find_element(By.CSS_SELECTOR, '[data-toggle-id="0"]').click()
+    assert len(browser.find_elements(By.CSS_SELECTOR, "[data-node-id]")) == len(policy.nodes)
+
+    # communications are listed and jump to their node
+    comms = browser.find_elements(By.CSS_SELECTOR, "#comm-list [data-goto]")
+    assert len(comms) == policy.communications > 0
+    comms[0].click()
+    assert browser.find_element(By.CSS_SELECTOR, ".node.selected.comm")
+
+    errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+    assert errors == []
