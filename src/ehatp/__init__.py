@@ -7,6 +7,8 @@
 >>> ehatp.validate(problem, result.policy)              # doctest: +SKIP
 """
 
+from .check.validator import Report
+from .check.validator import validate as _validate
 from .errors import EhatpError, InputError
 from .model.domain import (
     HIDDEN,
@@ -26,10 +28,8 @@ from .search.policy import Policy
 __version__ = "0.1.0"
 
 
-def validate(problem: Problem, policy: Policy) -> "check.Report":  # noqa: F821
+def validate(problem: Problem, policy: Policy) -> Report:
     """Check ``policy`` against ``problem`` with the independent validator."""
-    from .check.validator import validate as _validate
-
     return _validate(problem, policy)
 
 
