@@ -287,7 +287,7 @@ def test_ask_with_input_running_out_is_bad_input() -> None:
     (["missing.toml"], "missing.toml: cannot read the file"),
     ([str(P2), "--human", "bogus"], "--human: 'bogus' is not a mode; use one of ask, random"),
     ([str(P2), "--human", "script"], "--human script: no script given; add --script FILE"),
-    ([str(P2), "--policy", "nowhere.json"], "nowhere.json: cannot read the policy"),
+    ([str(P2), "--policy", "nowhere.json"], "nowhere.json: no such file"),
 ])
 def test_bad_input_is_one_line_and_exit_2(args: list[str], message: str) -> None:
     code, out = invoke(*args)
@@ -317,7 +317,7 @@ def test_policy_for_another_problem_is_bad_input(tmp_path: Path) -> None:
     bad = tmp_path / "bad.json"
     bad.write_text("{not json", encoding="utf-8")
     code, out = invoke(str(P2), "--policy", str(bad))
-    assert code == 2 and f"{bad}:1: not valid JSON" in out
+    assert code == 2 and f"{bad}:1:2: not valid JSON" in out
 
 
 # -- the API over every example --------------------------------------------------------------

@@ -241,7 +241,7 @@ def ground(
             return simplify_or([go(a, b) for a in f.args])
         if isinstance(f, Exists | Forall):
             parts = [go(f.body, {**b, **dict(zip(f.vars, vals, strict=True))})
-                     for vals in _product([objects[v.type] for v in f.vars])]
+                     for vals in product([objects[v.type] for v in f.vars])]
             return simplify_or(parts) if isinstance(f, Exists) else simplify_and(parts)
         if isinstance(f, GAtom):
             return f
@@ -250,12 +250,13 @@ def ground(
     return go(f, binding)
 
 
-def _product(domains: Sequence[Sequence[str]]) -> Iterable[tuple[str, ...]]:
+def product(domains: Sequence[Sequence[str]]) -> Iterable[tuple[str, ...]]:
+    """Every tuple with one value from each domain, in order."""
     if not domains:
         yield ()
         return
     for head in domains[0]:
-        for tail in _product(domains[1:]):
+        for tail in product(domains[1:]):
             yield (head, *tail)
 
 

@@ -25,6 +25,7 @@ from .formula import (
     conj,
     ground,
     ground_atoms,
+    product,
     simplify_and,
     substitute,
 )
@@ -165,7 +166,7 @@ class _Grounder:
             if name in self.static:
                 continue
             pred = d.predicates[name]
-            for args in _product([self.objects[v.type] for v in pred.params]):
+            for args in product([self.objects[v.type] for v in pred.params]):
                 atoms.append(call_str(name, args))
         self.atoms = atoms
         self.atom_index = {a: i for i, a in enumerate(atoms)}
@@ -180,7 +181,7 @@ class _Grounder:
             if name in self.static:
                 continue
             pred = d.predicates[name]
-            for args in _product([self.objects[v.type] for v in pred.params]):
+            for args in product([self.objects[v.type] for v in pred.params]):
                 bit = 1 << self.atom_index[call_str(name, args)]
                 kind = pred.observability.kind
                 if kind == "observable":
@@ -322,7 +323,7 @@ class _Grounder:
                 g.done[t] = (df, self.compile(df))
             gms = []
             for m in sorted(methods_of.get(name, []), key=lambda m: m.name):
-                for vals in _product([self.objects[v.type] for v in m.params]):
+                for vals in product([self.objects[v.type] for v in m.params]):
                     b = {**tb, **dict(zip(m.params, vals, strict=True))}
                     pre_f = self.shown(m.pre, b)
                     if pre_f == FALSE:
@@ -378,7 +379,7 @@ class _Grounder:
                     if a2 or d2:
                         conds.append((self.compile(c), a2, d2))
             elif isinstance(e, ForEach):
-                for vals in _product([self.objects[v.type] for v in e.vars]):
+                for vals in product([self.objects[v.type] for v in e.vars]):
                     a2, d2, c2 = self.effects(e.effects,
                                               {**b, **dict(zip(e.vars, vals, strict=True))}, cond)
                     add |= a2
@@ -410,15 +411,6 @@ def _split(name: str) -> tuple[str, tuple[str, ...]]:
     head, _, rest = name.partition("(")
     args = tuple(a.strip() for a in rest.rstrip(")").split(",")) if rest.strip(")") else ()
     return head, args
-
-
-def _product(domains: Sequence[Sequence[str]]) -> Iterable[tuple[str, ...]]:
-    if not domains:
-        yield ()
-        return
-    for head in domains[0]:
-        for tail in _product(domains[1:]):
-            yield (head, *tail)
 
 
 __all__ = ["FINISH", "GMethod", "GModel", "GOp", "Grounded", "conj", "ground_atoms",

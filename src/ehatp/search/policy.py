@@ -15,11 +15,13 @@ from typing import Any
 
 from ..epistemic.semantics import ASK, INFORM, Move, bits_of
 from ..epistemic.state import ROBOT, EState
+from ..errors import InputError
 from ..model.grounding import FINISH
 from ..model.problem import Cost, call_str
 from .andor import GOAL, Graph
 from .values import Values
 
+POLICY_FIX = "give a policy JSON written by `ehatp solve --out FILE`"
 FORMAT = "ehatp-policy"
 VERSION = 1
 
@@ -120,6 +122,67 @@ class Policy:
     @classmethod
     def read(cls, path: str | Path) -> Policy:
         return cls.from_dict(json.loads(Path(path).read_text(encoding="utf-8")))
+
+    @classmethod
+    def load(cls, path: str | Path) -> Policy:
+        """Read a policy file written by ``ehatp solve``, checking its tree; anything else is
+        one :class:`~ehatp.errors.InputError` line naming the file."""
+        name = str(path)
+        try:
+            text = Path(path).read_text(encoding="utf-8")
+        except FileNotFoundError:
+            raise InputError(name, "", "no such file", POLICY_FIX) from None
+        except OSError as e:
+            raise InputError(name, "", f"cannot read the file ({e.strerror or e})",
+                             "check the path") from None
+        except UnicodeDecodeError:
+            raise InputError(name, "", "not a text file", POLICY_FIX) from None
+        try:
+            raw = json.loads(text)
+        except json.JSONDecodeError as e:
+            raise InputError(name, f"{e.lineno}:{e.colno}", f"not valid JSON ({e.msg})",
+                             POLICY_FIX) from None
+        if not isinstance(raw, dict):
+            raise InputError(name, "", "not an ehatp policy (expected a JSON object)",
+                             POLICY_FIX)
+        try:
+            policy = cls.from_dict(raw)
+        except ValueError as e:
+            raise InputError(name, "", str(e), POLICY_FIX) from None
+        except KeyError as e:
+            raise InputError(name, "", f"not an ehatp policy (missing field {e})",
+                             POLICY_FIX) from None
+        except TypeError as e:
+            raise InputError(name, "", f"malformed policy node ({e})", POLICY_FIX) from None
+        policy._check_tree(name)
+        return policy
+
+    def _check_tree(self, name: str) -> None:
+        # readers walk children blindly; a hand-edited file must not send them into a loop
+        n = len(self.nodes)
+        if n == 0:
+            raise InputError(name, "nodes", "the policy has no nodes", POLICY_FIX)
+        if not isinstance(self.agents, dict) or not {"robot", "human"} <= self.agents.keys():
+            raise InputError(name, "agents", "agents must name the robot and the human",
+                             POLICY_FIX)
+        has_parent = [False] * n
+        for i, node in enumerate(self.nodes):
+            if node.id != i:
+                raise InputError(name, f"nodes[{i}]", f"node id {node.id} is not its position",
+                                 POLICY_FIX)
+            for c in node.children:
+                if not isinstance(c, int) or not 0 < c < n or has_parent[c]:
+                    raise InputError(name, f"nodes[{i}].children",
+                                     f"child {c!r} is out of range or has two parents",
+                                     POLICY_FIX)
+                has_parent[c] = True
+            if not isinstance(node.world_diffs, list) or not isinstance(node.state, list):
+                raise InputError(name, f"nodes[{i}]", "world_diffs and state must be lists",
+                                 POLICY_FIX)
+        orphans = n - sum(has_parent) - 1
+        if orphans:
+            raise InputError(name, "nodes", f"{orphans} node(s) are not below the root",
+                             POLICY_FIX)
 
 
 def _num(c: Cost | float) -> int | float:

@@ -9,10 +9,8 @@ from __future__ import annotations
 import json
 import sys
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, Any, NoReturn
+from typing import Annotated, Any
 
 import typer
 from rich.console import Console
@@ -20,14 +18,13 @@ from rich.live import Live
 from rich.text import Text
 
 from .. import __version__
-from ..errors import EhatpError, InputError
-from ..model.domain import DomainError
 from ..model.problem import Problem, load
 from ..search.andor import Stats
 from ..search.planner import Result, solve
 from ..search.policy import Policy
 from . import bench as bench_mod
-from .show import fmt_cost, plain, policy_lines, print_rich, read_policy
+from .common import EXIT_NO_POLICY, EXIT_OK, die, user_errors
+from .show import fmt_cost, plain, policy_lines, print_rich
 
 app = typer.Typer(
     name="ehatp",
@@ -40,30 +37,7 @@ bench_app = typer.Typer(help="Re-run the paper's benchmarks and compare with its
                         no_args_is_help=True)
 app.add_typer(bench_app, name="bench")
 
-EXIT_OK, EXIT_NO_POLICY, EXIT_BAD_INPUT = 0, 1, 2
 SHOW_PROGRESS_AFTER_S = 0.5  # quick solves never flash a progress line
-
-
-# --- errors ----------------------------------------------------------------------------------
-
-
-def die(message: str, code: int = EXIT_BAD_INPUT) -> NoReturn:
-    """One line on stderr, then exit; newlines are folded so the promise of one line holds."""
-    typer.echo(f"error: {' '.join(message.split())}", err=True)
-    raise typer.Exit(code)
-
-
-@contextmanager
-def user_errors(file: Path) -> Iterator[None]:
-    """Turn the errors a user can cause with ``file`` into one line and exit code 2."""
-    try:
-        yield
-    except InputError as e:
-        die(e.line())
-    except DomainError as e:
-        die(f"{file}: the domain is malformed: {e}; fix the domain definition")
-    except EhatpError as e:
-        die(f"{file}: {e}")
 
 
 def load_problem(path: Path) -> Problem:
@@ -74,7 +48,7 @@ def load_problem(path: Path) -> Problem:
 
 def load_policy(path: Path) -> Policy:
     with user_errors(path):
-        return read_policy(path)
+        return Policy.load(path)
     raise AssertionError
 
 

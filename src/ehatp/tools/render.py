@@ -29,8 +29,8 @@ import typer
 
 from ..errors import InputError
 from ..search.policy import Policy, PolicyNode
+from .common import die, user_errors
 
-POLICY_FIX = "give a policy JSON written by `ehatp solve --out FILE`"
 DEFAULT_MAX_NODES = 400  # more than this and a drawing stops being readable
 COMM_KINDS = ("inform", "ask")
 IDLE_KINDS = ("wait", "pass")
@@ -50,64 +50,6 @@ class DotMissing(Exception):
 
 
 # --------------------------------------------------------------------------- reading
-
-
-def load_policy(path: str | Path) -> tuple[Policy, dict[str, Any]]:
-    """The policy at ``path`` and its raw JSON object; :class:`InputError` if it is not one."""
-    name = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(name, "", "no such file", POLICY_FIX) from None
-    except OSError as e:
-        raise InputError(name, "", f"cannot read the file ({e.strerror or e})",
-                         "check the path") from None
-    except UnicodeDecodeError:
-        raise InputError(name, "", "not a text file", POLICY_FIX) from None
-    try:
-        raw = json.loads(text)
-    except json.JSONDecodeError as e:
-        raise InputError(name, f"{e.lineno}:{e.colno}", f"not valid JSON ({e.msg})",
-                         POLICY_FIX) from None
-    if not isinstance(raw, dict):
-        raise InputError(name, "", "not an ehatp policy (expected a JSON object)", POLICY_FIX)
-    try:
-        policy = Policy.from_dict(raw)
-    except ValueError as e:
-        raise InputError(name, "", str(e), POLICY_FIX) from None
-    except KeyError as e:
-        raise InputError(name, "", f"not an ehatp policy (missing field {e})",
-                         POLICY_FIX) from None
-    except TypeError as e:
-        raise InputError(name, "", f"malformed policy node ({e})", POLICY_FIX) from None
-    _check_tree(name, policy)
-    return policy, raw
-
-
-def _check_tree(name: str, policy: Policy) -> None:
-    # drawing code walks children blindly; a hand-edited file must not send it into a loop
-    n = len(policy.nodes)
-    if n == 0:
-        raise InputError(name, "nodes", "the policy has no nodes", POLICY_FIX)
-    if not isinstance(policy.agents, dict) or not {"robot", "human"} <= policy.agents.keys():
-        raise InputError(name, "agents", "agents must name the robot and the human", POLICY_FIX)
-    seen_parent = [False] * n
-    for i, node in enumerate(policy.nodes):
-        if node.id != i:
-            raise InputError(name, f"nodes[{i}]", f"node id {node.id} is not its position {i}",
-                             POLICY_FIX)
-        for c in node.children:
-            if not isinstance(c, int) or not 0 < c < n or seen_parent[c]:
-                raise InputError(name, f"nodes[{i}].children",
-                                 f"child {c!r} is out of range or has two parents", POLICY_FIX)
-            seen_parent[c] = True
-        if not isinstance(node.world_diffs, list) or not isinstance(node.state, list):
-            raise InputError(name, f"nodes[{i}]", "world_diffs and state must be lists",
-                             POLICY_FIX)
-    unreachable = n - sum(seen_parent) - 1
-    if unreachable:
-        raise InputError(name, "nodes", f"{unreachable} node(s) are not below the root",
-                         POLICY_FIX)
 
 
 # --------------------------------------------------------------------------- collapsing
@@ -331,10 +273,10 @@ def _script_json(data: Any) -> str:
     return re.sub(r"(?i)(https?):", r"\1\\u003a", text)
 
 
-def to_html(policy: Policy, raw: dict[str, Any] | None = None, *,
-            max_depth: int | None = None, max_nodes: int | None = DEFAULT_MAX_NODES) -> str:
+def to_html(policy: Policy, *, max_depth: int | None = None,
+            max_nodes: int | None = DEFAULT_MAX_NODES) -> str:
     """The self-contained explorer page; depth cap and budget only set what starts folded."""
-    data = dict(raw) if raw is not None else policy.to_dict()
+    data = policy.to_dict()
     config = {"maxDepth": max_depth, "maxNodes": max_nodes}
     parts = {
         # entities for ":" and "/" keep a URL-like problem name from reading as a link
@@ -356,17 +298,12 @@ def render(path: str | Path, fmt: Format = Format.dot, *, max_depth: int | None 
            max_nodes: int | None = DEFAULT_MAX_NODES,
            share: bool | None = None) -> tuple[str, list[str]]:
     """The rendered text and the collapse notes (empty when drawn whole)."""
-    policy, raw = load_policy(path)
+    policy = Policy.load(path)
     if fmt is Format.html:
-        return to_html(policy, raw, max_depth=max_depth, max_nodes=max_nodes), []
+        return to_html(policy, max_depth=max_depth, max_nodes=max_nodes), []
     view = plan_view(policy, max_depth=max_depth, max_nodes=max_nodes, share=share)
     dot = to_dot(policy, view)
     return (dot.source if fmt is Format.dot else to_svg(dot)), view.notes
-
-
-def _fail(line: str) -> typer.Exit:
-    typer.echo(f"error: {line}", err=True)
-    return typer.Exit(2)
 
 
 def render_command(
@@ -384,12 +321,12 @@ def render_command(
                                            "[default: only when over --max-nodes]."),
 ) -> None:
     """Draw a policy as Graphviz DOT or SVG, or as a self-contained HTML explorer."""
-    try:
-        text, notes = render(policy, fmt, max_depth=max_depth, max_nodes=max_nodes, share=share)
-    except InputError as e:
-        raise _fail(e.line()) from None
-    except DotMissing as e:
-        raise _fail(str(e)) from None
+    with user_errors(policy):
+        try:
+            text, notes = render(policy, fmt, max_depth=max_depth, max_nodes=max_nodes,
+                                 share=share)
+        except DotMissing as e:
+            die(str(e))
     if notes:
         typer.echo(f"render: {policy}: collapsed: {'; '.join(notes)}", err=True)
     if out is None:
@@ -398,8 +335,8 @@ def render_command(
     try:
         out.write_text(text, encoding="utf-8")
     except OSError as e:
-        raise _fail(InputError(str(out), "", f"cannot write ({e.strerror or e})",
-                               "check that the directory exists and is writable").line()) from None
+        die(InputError(str(out), "", f"cannot write ({e.strerror or e})",
+                       "check that the directory exists and is writable").line())
 
 
 def register(app: typer.Typer) -> None:

@@ -6,20 +6,16 @@ files, tests) and :func:`print_rich` colours it on a terminal, so both show the 
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from pathlib import Path
 from typing import Any
 
 from rich.console import Console
 from rich.text import Text
 
-from ..errors import InputError
 from ..search.policy import Policy, PolicyNode, timeline
 
-POLICY_FIX = "give a policy JSON written by `ehatp solve --out FILE`"
 COMM_KINDS = ("inform", "ask")
 
 # tree guides: (plain, unicode)
@@ -33,53 +29,6 @@ Segment = tuple[str, str]  # (text, rich style)
 class Line:
     guides: tuple[str, ...]  # keys of _GUIDES, outermost first
     segments: list[Segment]
-
-
-def read_policy(path: str | Path) -> Policy:
-    """Load a policy JSON, raising :class:`InputError` (one line) when it is not one."""
-    name = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except OSError as e:
-        raise InputError(name, "", f"cannot read the file ({e.strerror or e})",
-                         "check the path") from None
-    except UnicodeDecodeError:
-        raise InputError(name, "", "not a text file", POLICY_FIX) from None
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as e:
-        raise InputError(name, f"{e.lineno}:{e.colno}", f"not valid JSON ({e.msg})",
-                         POLICY_FIX) from None
-    if not isinstance(data, dict):
-        raise InputError(name, "", "not an ehatp policy (expected a JSON object)", POLICY_FIX)
-    try:
-        policy = Policy.from_dict(data)
-    except ValueError as e:
-        raise InputError(name, "", str(e), POLICY_FIX) from None
-    except KeyError as e:
-        raise InputError(name, "", f"not an ehatp policy (missing field {e})",
-                         POLICY_FIX) from None
-    except TypeError as e:
-        raise InputError(name, "", f"malformed policy node ({e})", POLICY_FIX) from None
-    _check_shape(name, policy)
-    return policy
-
-
-def _check_shape(name: str, policy: Policy) -> None:
-    # catch hand-edited or truncated files here rather than as an IndexError mid-print
-    if not policy.nodes:
-        raise InputError(name, "nodes", "the policy has no nodes", POLICY_FIX)
-    if not isinstance(policy.agents, dict) or not {"robot", "human"} <= policy.agents.keys():
-        raise InputError(name, "agents", "agents must name the robot and the human", POLICY_FIX)
-    n = len(policy.nodes)
-    for i, node in enumerate(policy.nodes):
-        if node.id != i:
-            raise InputError(name, f"nodes[{i}]", f"node id {node.id} is not its position {i}",
-                             POLICY_FIX)
-        bad = [c for c in node.children if not isinstance(c, int) or not i < c < n]
-        if bad:
-            raise InputError(name, f"nodes[{i}]", f"child {bad[0]!r} is not a later node",
-                             POLICY_FIX)
 
 
 def fmt_cost(c: Any) -> str:
@@ -231,5 +180,5 @@ def print_rich(lines: Sequence[Line], console: Console) -> None:
         console.print(text, soft_wrap=True, highlight=False)
 
 
-__all__ = ["Line", "fmt_cost", "header", "plain", "policy_lines", "print_rich", "read_policy",
+__all__ = ["Line", "fmt_cost", "header", "plain", "policy_lines", "print_rich",
            "timeline_lines", "tree_lines"]

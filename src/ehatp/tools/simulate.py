@@ -8,22 +8,21 @@ expectation of the robot), 2 bad input.
 
 from __future__ import annotations
 
-import json
 import random
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
-from typing import NoReturn, TextIO
+from typing import TextIO
 
 import typer
 
 from ..epistemic.semantics import Move
-from ..errors import EhatpError, InputError
-from ..model.domain import DomainError
+from ..errors import InputError
 from ..model.problem import Cost, Problem, load
 from ..search.policy import Policy
+from .common import user_errors
 from .executor import ExecutionError, Executor, PolicyMismatch, UncoveredHumanAction
 
 MODES = ("ask", "random", "first", "script")
@@ -207,20 +206,6 @@ def simulate(ex: Executor, choose: Chooser, out: Callable[[str], None],
     return 1
 
 
-def _load_policy(path: Path) -> Policy:
-    try:
-        return Policy.read(path)
-    except OSError as e:
-        raise InputError(str(path), "", f"cannot read the policy ({e.strerror})",
-                         "check the path given to --policy") from None
-    except json.JSONDecodeError as e:
-        raise InputError(str(path), f"{e.lineno}", f"not valid JSON: {e.msg}",
-                         "give a policy written by `ehatp solve`") from None
-    except (ValueError, KeyError, TypeError) as e:
-        raise InputError(str(path), "", f"not a usable policy ({e})",
-                         "give a policy written by `ehatp solve`") from None
-
-
 def run(problem_path: Path, *, policy_path: Path | None = None, human: str = "first",
         script_path: Path | None = None, seed: int = 0, stdin: TextIO | None = None,
         out: Callable[[str], None] = print) -> int:
@@ -237,7 +222,7 @@ def run(problem_path: Path, *, policy_path: Path | None = None, human: str = "fi
         raise InputError("--script", "", f"a script is only read with --human script, "
                          f"not {human}", "drop --script or use --human script")
     problem: Problem = load(problem_path)
-    policy = _load_policy(policy_path) if policy_path is not None else None
+    policy = Policy.load(policy_path) if policy_path is not None else None
     try:
         ex = Executor(problem, policy)
     except PolicyMismatch as e:
@@ -269,12 +254,6 @@ def run(problem_path: Path, *, policy_path: Path | None = None, human: str = "fi
         raise InputError(where, "", str(e)) from None
 
 
-def _die(message: str) -> NoReturn:
-    """One line on stderr and exit code 2, as the rest of the CLI does."""
-    typer.echo(f"error: {' '.join(message.split())}", err=True)
-    raise typer.Exit(2)
-
-
 def register(app: typer.Typer) -> None:
     """Add the ``simulate`` command to ``app``."""
 
@@ -291,15 +270,9 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Step through an execution of the policy for PROBLEM, saying what each agent
         believes. Exit code 0: goal reached; 1: the human left the policy; 2: bad input."""
-        try:
+        with user_errors(problem):
             code = run(problem, policy_path=policy, human=human, script_path=script,
                        seed=seed, out=typer.echo)
-        except InputError as e:
-            _die(e.line())
-        except DomainError as e:
-            _die(f"{problem}: the domain is malformed: {e}; fix the domain definition")
-        except EhatpError as e:
-            _die(f"{problem}: {e}")
         raise typer.Exit(code)
 
 
