@@ -69,11 +69,10 @@ class Semantics:
     def follow(self, es: EState, label: str) -> Move:
         """The move of the agent to move whose label is ``label`` (an agent name may lead,
         spaces are ignored); ValueError naming the options when there is none."""
+        head, _, rest = label.strip().partition(" ")
+        if head in self.names and rest:
+            label = rest
         want = "".join(label.split())
-        for name in self.names:
-            if want.startswith(name) and not want.startswith(name + "(") and any(
-                    "".join(m.label.split()) == want[len(name):] for m in self.moves(es)):
-                want = want[len(name):]
         moves = self.moves(es)
         for m in moves:
             if "".join(m.label.split()) == want:

@@ -22,9 +22,7 @@ from .formula import (
     StateFn,
     Var,
     compile_ground,
-    conj,
     ground,
-    ground_atoms,
     product,
     simplify_and,
     substitute,
@@ -413,5 +411,4 @@ def _split(name: str) -> tuple[str, tuple[str, ...]]:
     return head, args
 
 
-__all__ = ["FINISH", "GMethod", "GModel", "GOp", "Grounded", "conj", "ground_atoms",
-           "ground_problem"]
+__all__ = ["FINISH", "GMethod", "GModel", "GOp", "Grounded", "ground_problem"]

@@ -42,7 +42,6 @@ class Stats:
     expanded: int = 0
     max_worlds: int = 0  # largest |W| (the designated world is not counted separately)
     time_s: float = 0.0
-    value_passes: int = 0
 
     def as_dict(self) -> dict[str, int | float]:
         return {"generated": self.generated, "distinct": self.distinct,
@@ -127,7 +126,6 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
             # every node with g <= level is expanded: the optimum may be proven now
             if gr.solved[root]:
                 values = compute_values(gr, root)
-                stats.value_passes += 1
                 if values.value[root] <= level:
                     status, optimal = "solved", True
                     break
@@ -148,7 +146,6 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
         if gr.solved[root]:
             status, optimal = "solved", True
             values = compute_values(gr, root)
-            stats.value_passes += 1
     if status in ("timeout", "state-limit") and gr.solved[root]:
         values = compute_values(gr, root)  # best policy found so far, not proven optimal
     stats.time_s = time.perf_counter() - start
