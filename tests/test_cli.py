@@ -14,7 +14,7 @@ import typer
 from typer.testing import CliRunner
 
 import ehatp
-from ehatp.search.policy import Policy
+from ehatp.policy_format import Policy
 from ehatp.tools import bench
 from ehatp.tools.cli import app
 from ehatp.tools.examples import example, examples_dir

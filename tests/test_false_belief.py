@@ -7,7 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import ehatp
-from ehatp.search.policy import Policy, PolicyNode
+from ehatp.policy_format import Policy, PolicyNode
 
 from .scenarios import walk
 

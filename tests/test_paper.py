@@ -8,8 +8,8 @@ import pytest
 
 import ehatp
 from ehatp.model.grounding import ground_problem
+from ehatp.policy_format import Policy
 from ehatp.search.andor import search
-from ehatp.search.policy import Policy
 
 from .scenarios import labels, walk, world_atoms
 

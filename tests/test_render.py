@@ -17,7 +17,7 @@ import typer
 from typer.testing import CliRunner
 
 import ehatp
-from ehatp.search.policy import Policy
+from ehatp.policy_format import Policy
 from ehatp.tools import render as rd
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples" / "cubes"

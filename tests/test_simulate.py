@@ -11,7 +11,7 @@ import typer
 from typer.testing import CliRunner
 
 import ehatp
-from ehatp.search.policy import Policy, PolicyNode
+from ehatp.policy_format import Policy, PolicyNode
 from ehatp.tools.executor import (
     ExecutionError,
     Executor,

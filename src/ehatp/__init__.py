@@ -7,6 +7,8 @@
 >>> ehatp.validate(problem, result.policy)              # doctest: +SKIP
 """
 
+from typing import TYPE_CHECKING
+
 from .check.validator import Report
 from .check.validator import validate as _validate
 from .errors import EhatpError, InputError
@@ -22,8 +24,11 @@ from .model.domain import (
 )
 from .model.formula import FALSE, TRUE, Var, eq, exists, forall
 from .model.problem import BeliefWorld, Costs, Limits, Options, Problem, load
-from .search.planner import Result, solve
-from .search.policy import Policy
+from .policy_format import Policy
+
+if TYPE_CHECKING:
+    from .search.planner import Result, solve
+    from .tools.executor import ExecutionError, Executor, PolicyMismatch, UncoveredHumanAction
 
 __version__ = "0.1.0"
 
@@ -33,16 +38,20 @@ def validate(problem: Problem, policy: Policy) -> Report:
     return _validate(problem, policy)
 
 
-_TOOLS = {"Executor", "UncoveredHumanAction", "ExecutionError", "PolicyMismatch"}
+_LAZY = {"solve": "search.planner", "Result": "search.planner", "Executor": "tools.executor",
+         "UncoveredHumanAction": "tools.executor", "ExecutionError": "tools.executor",
+         "PolicyMismatch": "tools.executor"}
 
 
 def __getattr__(name: str) -> object:
-    # the execution API lives in tools/; import it only when asked for
-    if name in _TOOLS:
-        from .tools import executor
+    # the planner and the execution API load only when asked for, so that importing the
+    # validator (or reading a policy file) never loads the search
+    where = _LAZY.get(name)
+    if where is None:
+        raise AttributeError(f"module 'ehatp' has no attribute {name!r}")
+    import importlib
 
-        return getattr(executor, name)
-    raise AttributeError(f"module 'ehatp' has no attribute {name!r}")
+    return getattr(importlib.import_module(f".{where}", __name__), name)
 
 
 __all__ = [

@@ -21,7 +21,7 @@ from typing import TypeVar
 from ..model.formula import And, Formula, StateFn, negate
 from ..model.grounding import FINISH, GModel, GOp, Grounded, ground_problem
 from ..model.problem import Problem
-from ..search.policy import Policy, PolicyNode
+from ..policy_format import Policy, PolicyNode
 
 ROBOT, HUMAN = 0, 1
 ACTION, WAIT, PASS, INFORM, ASK, START = "action", "wait", "pass", "inform", "ask", "start"
@@ -234,6 +234,12 @@ class _Semantics:
         op = self.g.robot_seen_by_human.ops.get(a)
         return op if op is not None else self.g.robot.ops[a]
 
+    def attributed(self, agenda: Agenda) -> Agenda:
+        """The robot agenda as the human can hold it (section 4): the tasks its model of the
+        robot knows; a task M_R^H has no operator, method or done-condition for is dropped."""
+        m = self.g.robot_seen_by_human
+        return tuple(t for t in agenda if t in m.ops or t in m.methods or t in m.done)
+
     def product(self, worlds: Worlds) -> Worlds:
         out: set[World] = set(worlds)  # the noop
         for s, tn in worlds:
@@ -256,7 +262,7 @@ class _Semantics:
 
     def initial(self) -> EState:
         g = self.g
-        worlds = self.sa(frozenset(g.beliefs), g.init)
+        worlds = self.sa(frozenset((s, self.attributed(ag)) for s, ag in g.beliefs), g.init)
         turn = ROBOT if self.p.starts == "robot" else HUMAN
         return EState(turn, g.init, g.robot_agenda, g.human_agenda, worlds, 0, 0)
 
@@ -282,7 +288,8 @@ class _Semantics:
                     if b == a:
                         seen.add((self.rh_op(a).apply(s), rest2))
             if not seen:  # nobody expected it: revise, the robot's agenda is the real one
-                seen = {(self.rh_op(a).apply(s), rest) for s, _ in es.worlds}
+                told = self.attributed(rest)
+                seen = {(self.rh_op(a).apply(s), told) for s, _ in es.worlds}
             worlds = self.set_inferable(frozenset(seen), es.true, t2)
         else:
             worlds, k = self.product(es.worlds), k + 1
@@ -299,7 +306,9 @@ class _Semantics:
     def inform(self, es: EState, atoms: Sequence[int]) -> Step:
         worlds = self.observe(es.worlds, es.true, sorted(atoms))
         after = self.advance(es, INFORM, es.true, es.robot, es.human, worlds, es.k)
-        label = f"inform({', '.join(self.g.atoms[i] for i in sorted(atoms))})"
+        told = (self.g.atoms[i] if es.true >> i & 1 else f"not {self.g.atoms[i]}"
+                for i in sorted(atoms))
+        label = f"inform({', '.join(told)})"
         return Step(ROBOT, INFORM, label, _frac(self.p.costs.inform), after)
 
     def conjuncts(self, conds: Sequence[Formula], states: frozenset[int]) -> list[Formula]:
@@ -379,9 +388,11 @@ class _Semantics:
         states = frozenset(s for s, _ in worlds)
         human = self.human_view(es.human, states) != self.human_view(es.human,
                                                                      frozenset({es.true}))
+        # the robot's options include being done (FINISH): a divergence that hides from the
+        # human that the robot has finished is relevant, since the goal needs H to believe it
         expected = {a for s, tn in worlds
-                    for a, _ in self.refine(self.g.robot_seen_by_human, tn, s) if a != FINISH}
-        real = {a for a, _ in self.refine(self.g.robot, es.robot, es.true) if a != FINISH}
+                    for a, _ in self.refine(self.g.robot_seen_by_human, tn, s)}
+        real = {a for a, _ in self.refine(self.g.robot, es.robot, es.true)}
         return human, expected != real
 
     def check_inform(self, es: EState, atoms: Sequence[int]) -> str | None:
@@ -654,6 +665,11 @@ class _Validator:
         if any(n.id != i for i, n in enumerate(nodes)):
             self.fail([], "node ids are not their positions in the node list")
             return self.report()
+        if pol.problem != self.problem.name:
+            self.fail([], f"the policy was planned for problem {pol.problem!r}, not for "
+                      f"{self.problem.name!r}: solve this problem, or validate against the "
+                      "policy's own problem")
+            return self.report()
         if pol.K != sem.K:
             self.fail([], f"policy K is {pol.K}, the problem's is {sem.K}")
         if pol.agents != {"robot": sem.names[ROBOT], "human": sem.names[HUMAN]}:
@@ -767,12 +783,31 @@ class _Validator:
         if child.kind != st.kind:
             self.fail(cpath, f"{where}: kind is {child.kind!r}, expected {st.kind!r}")
             return False
+        want_call = self.call(st)
+        if (child.name, list(child.args)) != want_call:
+            self.fail(cpath, f"{where}: name and args are {child.name!r} {list(child.args)}, "
+                      f"expected {want_call[0]!r} {want_call[1]}")
+            return False
         if not _same(child.cost, st.cost):
             self.fail(cpath, f"{where}: cost is {child.cost}, but the move costs "
                       f"{_num(st.cost)} under the problem's costs (section 7)")
             return False
         self.step_cost[child.id] = st.cost
         return True
+
+    def call(self, st: Step) -> tuple[str, list[str]]:
+        """The name and arguments a policy records for a move (docs/policy-format.md)."""
+        g = self.sem.g
+        if st.kind == ACTION:
+            op = (g.robot if st.agent == ROBOT else g.human).ops[g.task_index[st.label]]
+            return op.schema, list(op.args)
+        if st.kind == INFORM:
+            parsed = self.sem.parse_inform(st.label)
+            assert not isinstance(parsed, str)
+            return INFORM, [g.atoms[i] if v else f"not {g.atoms[i]}" for i, v in parsed]
+        if st.kind == ASK:
+            return ASK, [st.label[len("ask("):-1]]
+        return st.kind, []
 
     def robot_node(self, node: PolicyNode, es: EState, path: list[str],
                    kids: list[PolicyNode], where: str) -> list[tuple[PolicyNode, Step]]:

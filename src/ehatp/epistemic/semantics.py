@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from itertools import combinations
+from typing import NamedTuple
 
 from ..model.formula import And, Formula, conj, ground_atoms
 from ..model.grounding import FINISH, GOp, Grounded
@@ -36,6 +37,17 @@ class Move:
     op: int = -1
     atoms: int = 0  # inform: the atoms told
     failure: str = ""
+
+
+class Call(NamedTuple):
+    """A move in the domain's vocabulary: ``name`` and ``args`` split an operator call
+    (``place``, ``("w", "box2")``); for ``inform`` the args are the literals told
+    (``("link(a, b)", "not x")``), for ``ask`` the question; ``wait`` and ``pass`` have none.
+    ``label`` is how policies and traces print the move."""
+
+    name: str
+    args: tuple[str, ...]
+    label: str
 
 
 def bits_of(m: int) -> list[int]:
@@ -71,6 +83,9 @@ class Semantics:
         spaces are ignored); ValueError naming the options when there is none."""
         head, _, rest = label.strip().partition(" ")
         if head in self.names and rest:
+            if head != self.names[es.turn]:
+                raise ValueError(f"{label!r} names {head}, but it is {self.names[es.turn]}'s "
+                                 "turn")
             label = rest
         want = "".join(label.split())
         moves = self.moves(es)
@@ -83,11 +98,30 @@ class Semantics:
         raise ValueError(f"{label!r} is not a move of {who} here; options: "
                          + ", ".join(m.label for m in moves))
 
+    def describe(self, move: Move) -> Call:
+        """The move as name, arguments and label (§4-§5): the one translation used by the
+        policy writer, the executor and the simulator."""
+        g = self.g
+        if move.op >= 0:
+            op = (g.robot.ops if move.agent == ROBOT else g.human.ops)[move.op]
+            return Call(op.schema, tuple(op.args), move.label)
+        if move.kind == INFORM:
+            assert move.child is not None  # informing never fails
+            return Call(INFORM, self.literals(move.child.true, move.atoms), move.label)
+        if move.kind == ASK:
+            return Call(ASK, (move.label[len("ask("):-1],), move.label)
+        return Call(move.kind, (), move.label)
+
+    def literals(self, t: int, mask: int) -> tuple[str, ...]:
+        """The atoms of ``mask`` as ``t`` has them: ``a`` when true, ``not a`` when false."""
+        return tuple(self.g.atoms[i] if t >> i & 1 else f"not {self.g.atoms[i]}"
+                     for i in bits_of(mask))
+
     # -- basics ---------------------------------------------------------------------------
     def initial(self) -> EState:
         g = self.g
         turn = HUMAN if g.problem.starts == "human" else ROBOT
-        worlds = self.assess(g.init, normalize(g.beliefs))
+        worlds = self.assess(g.init, normalize((s, self.attributed(ag)) for s, ag in g.beliefs))
         return EState(turn, g.init, g.robot_agenda, g.human_agenda, worlds, 0, 0)
 
     def copresent(self, t: int) -> bool:
@@ -131,6 +165,15 @@ class Semantics:
     def anticipated_op(self, op: int) -> GOp:
         """The robot action as the human understands it (M_R^H), else as it really is."""
         return self.g.robot_seen_by_human.ops.get(op) or self.g.robot.ops[op]
+
+    def attributed(self, agenda: Agenda) -> Agenda:
+        """§4: the robot agenda as the human holds it after revising its beliefs: the tasks of
+        ``agenda`` its model of the robot (M_R^H) knows. A task M_R^H has no operator, method
+        or done-condition for is dropped: the human can expect nothing of it."""
+        m = self.g.robot_seen_by_human
+        if m is self.g.robot:
+            return agenda
+        return tuple(t for t in agenda if t in m.ops or t in m.methods or t in m.done)
 
     def successors(self, w: World) -> tuple[World, ...]:
         """The world itself (noop) and every event the human anticipates of the robot there."""
@@ -195,8 +238,8 @@ class Semantics:
                     if o == op.id:
                         new.append((self.anticipated_op(o).apply(s), r))
             if not new:  # the human could not have expected it: revise
-                seen = self.anticipated_op(op.id)
-                new = [(seen.apply(s), rest) for s, _ in es.worlds]
+                seen, told = self.anticipated_op(op.id), self.attributed(rest)
+                new = [(seen.apply(s), told) for s, _ in es.worlds]
             inf = (es.true ^ t2) & self.g.inferable_mask
             if inf:
                 new = [((s & ~inf) | (t2 & inf), a) for s, a in new]
@@ -299,9 +342,7 @@ class Semantics:
         return es._replace(turn=HUMAN, worlds=self.observe(es.true, es.worlds, mask), passive=0)
 
     def inform_label(self, t: int, mask: int) -> str:
-        parts = [(self.g.atoms[i] if t >> i & 1 else f"not {self.g.atoms[i]}")
-                 for i in bits_of(mask)]
-        return f"inform({', '.join(parts)})"
+        return f"inform({', '.join(self.literals(t, mask))})"
 
     def human_view(self, agenda: Agenda, states: tuple[int, ...]) -> frozenset[tuple[int, bool]]:
         full = (1 << len(states)) - 1

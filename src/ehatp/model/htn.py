@@ -61,7 +61,8 @@ class Refiner:
             raise DomainError(f"task {self.task_names[t]} decomposes without end "
                               f"(more than {MAX_DECOMPOSITION} nested methods)")
         rest = agenda[1:]
-        for meth in m.methods[t]:
+        # a task this model does not know gives nothing: the agent is blocked on it
+        for meth in m.methods.get(t, ()):
             if meth.pre(s):
                 self._go(meth.subtasks + rest, s, out, depth + 1)
 
@@ -118,7 +119,7 @@ class Refiner:
         if depth > MAX_DECOMPOSITION:
             raise DomainError(f"task {self.task_names[t]} decomposes without end "
                               f"(more than {MAX_DECOMPOSITION} nested methods)")
-        for meth in m.methods[t]:
+        for meth in m.methods.get(t, ()):
             mw = _holds(meth.pre, states, ws)
             if mw:
                 self._go_all(meth.subtasks + rest, states, mw,

@@ -7,8 +7,9 @@ from typing import Any
 
 from ..model.grounding import ground_problem
 from ..model.problem import Problem
+from ..policy_format import Policy
 from .andor import Progress, search
-from .policy import Policy, explain_failure, extract
+from .policy import explain_failure, extract
 
 
 @dataclass

@@ -1,215 +1,17 @@
-"""The robot policy: a tree that branches on every human choice, and its JSON form.
-
-A node is one step: the agent that acted, the action (in the domain's vocabulary), its cost, and
-what holds after it (co-presence, K-counter, the human's worlds and how they differ from the
-truth). The root is the initial state. See ``docs/policy-format.md``.
-"""
+"""Policy extraction: the robot policy chosen by the values, as a :class:`Policy` (the file
+format lives in :mod:`ehatp.policy_format`), and why no policy exists when none does."""
 
 from __future__ import annotations
 
-import json
-from dataclasses import dataclass, field
-from fractions import Fraction
-from pathlib import Path
 from typing import Any
 
 from ..epistemic.semantics import ASK, INFORM, Move, bits_of
 from ..epistemic.state import ROBOT, EState
-from ..errors import InputError
 from ..model.grounding import FINISH
-from ..model.problem import Cost, call_str
+from ..model.problem import Cost
+from ..policy_format import Policy, PolicyNode, num
 from .andor import GOAL, Graph
 from .values import Values
-
-POLICY_FIX = "give a policy JSON written by `ehatp solve --out FILE`"
-FORMAT = "ehatp-policy"
-VERSION = 1
-
-
-@dataclass
-class PolicyNode:
-    id: int
-    agent: str | None  # who acted to reach this node (None at the root)
-    kind: str  # start | action | wait | pass | inform | ask
-    action: str
-    name: str
-    args: list[str]
-    cost: Cost
-    copresent: bool
-    k: int
-    worlds: int
-    divergence: list[str]  # truth's literals on which some world disagrees
-    world_diffs: list[dict[str, list[str]]]  # per world: atoms true / false unlike the truth
-    state: list[str]  # true fluent atoms
-    robot_agenda: list[str]
-    human_agenda: list[str]
-    to_move: str | None  # who moves next (None at a goal leaf)
-    value: Cost  # worst-case cost from here to the end
-    goal: bool
-    children: list[int] = field(default_factory=list)
-
-    def to_dict(self) -> dict[str, Any]:
-        d = {k: v for k, v in self.__dict__.items()}
-        d["cost"] = _num(self.cost)
-        d["value"] = _num(self.value)
-        return d
-
-
-@dataclass
-class Policy:
-    problem: str
-    domain: str
-    agents: dict[str, str]
-    K: int
-    costs: dict[str, Any]
-    nodes: list[PolicyNode]
-    cost: Cost
-    communications: int
-    leaves: int
-    optimal: bool = True
-    stats: dict[str, Any] = field(default_factory=dict)
-    after: list[str] = field(default_factory=list)  # the fixed opening the root follows
-
-    @property
-    def root(self) -> PolicyNode:
-        return self.nodes[0]
-
-    def children(self, n: PolicyNode) -> list[PolicyNode]:
-        return [self.nodes[i] for i in n.children]
-
-    def branches(self) -> list[list[PolicyNode]]:
-        """Every root-to-leaf path."""
-        out: list[list[PolicyNode]] = []
-        stack: list[list[PolicyNode]] = [[self.root]]
-        while stack:
-            path = stack.pop()
-            kids = self.children(path[-1])
-            if not kids:
-                out.append(path)
-            for c in reversed(kids):
-                stack.append([*path, c])
-        return out
-
-    def timelines(self) -> list[dict[str, Any]]:
-        return [timeline(self, b) for b in self.branches()]
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "format": FORMAT, "version": VERSION, "problem": self.problem, "domain": self.domain,
-            "agents": self.agents, "K": self.K, "costs": self.costs, "cost": _num(self.cost),
-            "communications": self.communications, "leaves": self.leaves,
-            "optimal": self.optimal, "stats": self.stats, "after": self.after,
-            "nodes": [n.to_dict() for n in self.nodes], "timelines": self.timelines(),
-        }
-
-    def to_json(self) -> str:
-        return json.dumps(self.to_dict(), indent=1, sort_keys=True) + "\n"
-
-    def write(self, path: str | Path) -> None:
-        Path(path).write_text(self.to_json(), encoding="utf-8")
-
-    @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> Policy:
-        if d.get("format") != FORMAT:
-            raise ValueError(f"not an ehatp policy (format is {d.get('format')!r})")
-        if d.get("version") != VERSION:
-            raise ValueError(f"policy format version {d.get('version')} is not {VERSION}")
-        nodes = [PolicyNode(**{k: v for k, v in n.items()}) for n in d["nodes"]]
-        return cls(d["problem"], d["domain"], d["agents"], d["K"], d["costs"], nodes, d["cost"],
-                   d["communications"], d["leaves"], d.get("optimal", True), d.get("stats", {}),
-                   d.get("after", []))
-
-    @classmethod
-    def read(cls, path: str | Path) -> Policy:
-        return cls.from_dict(json.loads(Path(path).read_text(encoding="utf-8")))
-
-    @classmethod
-    def load(cls, path: str | Path) -> Policy:
-        """Read a policy file written by ``ehatp solve``, checking its tree; anything else is
-        one :class:`~ehatp.errors.InputError` line naming the file."""
-        name = str(path)
-        try:
-            text = Path(path).read_text(encoding="utf-8")
-        except FileNotFoundError:
-            raise InputError(name, "", "no such file", POLICY_FIX) from None
-        except OSError as e:
-            raise InputError(name, "", f"cannot read the file ({e.strerror or e})",
-                             "check the path") from None
-        except UnicodeDecodeError:
-            raise InputError(name, "", "not a text file", POLICY_FIX) from None
-        try:
-            raw = json.loads(text)
-        except json.JSONDecodeError as e:
-            raise InputError(name, f"{e.lineno}:{e.colno}", f"not valid JSON ({e.msg})",
-                             POLICY_FIX) from None
-        if not isinstance(raw, dict):
-            raise InputError(name, "", "not an ehatp policy (expected a JSON object)",
-                             POLICY_FIX)
-        try:
-            policy = cls.from_dict(raw)
-        except ValueError as e:
-            raise InputError(name, "", str(e), POLICY_FIX) from None
-        except KeyError as e:
-            raise InputError(name, "", f"not an ehatp policy (missing field {e})",
-                             POLICY_FIX) from None
-        except TypeError as e:
-            raise InputError(name, "", f"malformed policy node ({e})", POLICY_FIX) from None
-        policy._check_tree(name)
-        return policy
-
-    def _check_tree(self, name: str) -> None:
-        # readers walk children blindly; a hand-edited file must not send them into a loop
-        n = len(self.nodes)
-        if n == 0:
-            raise InputError(name, "nodes", "the policy has no nodes", POLICY_FIX)
-        if not isinstance(self.agents, dict) or not {"robot", "human"} <= self.agents.keys():
-            raise InputError(name, "agents", "agents must name the robot and the human",
-                             POLICY_FIX)
-        has_parent = [False] * n
-        for i, node in enumerate(self.nodes):
-            if node.id != i:
-                raise InputError(name, f"nodes[{i}]", f"node id {node.id} is not its position",
-                                 POLICY_FIX)
-            for c in node.children:
-                if not isinstance(c, int) or not 0 < c < n or has_parent[c]:
-                    raise InputError(name, f"nodes[{i}].children",
-                                     f"child {c!r} is out of range or has two parents",
-                                     POLICY_FIX)
-                has_parent[c] = True
-            if not isinstance(node.world_diffs, list) or not isinstance(node.state, list):
-                raise InputError(name, f"nodes[{i}]", "world_diffs and state must be lists",
-                                 POLICY_FIX)
-        orphans = n - sum(has_parent) - 1
-        if orphans:
-            raise InputError(name, "nodes", f"{orphans} node(s) are not below the root",
-                             POLICY_FIX)
-
-
-def _num(c: Cost | float) -> int | float:
-    if isinstance(c, Fraction):
-        return int(c) if c.denominator == 1 else float(c)
-    return c
-
-
-def timeline(policy: Policy, branch: list[PolicyNode]) -> dict[str, Any]:
-    """Turn-taking steps while together; parallel lanes between separation and reunion."""
-    r_name, h_name = policy.agents["robot"], policy.agents["human"]
-    steps: list[dict[str, Any]] = []
-    lanes: dict[str, list[str]] | None = None
-    prev = branch[0]
-    for n in branch[1:]:
-        assert n.agent is not None
-        if prev.copresent:
-            steps.append({"agent": n.agent, "action": n.action})
-        else:
-            if lanes is None:
-                lanes = {r_name: [], h_name: []}
-                steps.append({"parallel": lanes})
-            lanes[n.agent].append(n.action)
-        if n.copresent:
-            lanes = None
-        prev = n
-    return {"leaf": branch[-1].id, "steps": steps}
 
 
 def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
@@ -236,16 +38,9 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
             agent, kind, label, name, args = None, "start", "start", "start", []
         else:
             agent = r_name if move.agent == ROBOT else h_name
-            kind, label, cost = move.kind, move.label, move.cost
-            if move.op >= 0:
-                op = (g.robot.ops if move.agent == ROBOT else g.human.ops)[move.op]
-                name, args = op.schema, list(op.args)
-            elif kind == INFORM:
-                name, args = "inform", label[len("inform("):-1].split(", ")
-            elif kind == ASK:
-                name, args = "ask", [label[len("ask("):-1]]
-            else:
-                name, args = kind, []
+            kind, cost = move.kind, move.cost
+            name, call_args, label = sem.describe(move)
+            args = list(call_args)
         node = PolicyNode(
             id=len(nodes), agent=agent, kind=kind, action=label, name=name, args=args,
             cost=cost, copresent=sem.copresent(t), k=es.k, worlds=len(es.worlds),
@@ -286,9 +81,9 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
         x.children = [remap[c] for c in x.children]
     leaves = sum(1 for x in order if not x.children)
     comms = sum(1 for x in order if x.kind in (INFORM, ASK))
-    costs = {"inform": _num(p.costs.inform), "ask": _num(p.costs.ask),
-             "wait": _num(p.costs.wait), "pass": _num(p.costs.pass_),
-             "actions": {k: _num(v) for k, v in sorted(p.costs.actions.items())}}
+    costs = {"inform": num(p.costs.inform), "ask": num(p.costs.ask),
+             "wait": num(p.costs.wait), "pass": num(p.costs.pass_),
+             "actions": {k: num(v) for k, v in sorted(p.costs.actions.items())}}
     return Policy(problem_name, p.domain.name, {"robot": r_name, "human": h_name}, p.K, costs,
                   order, values.value[root], comms, leaves,  # type: ignore[arg-type]
                   optimal, stats or {}, list(p.after))
@@ -334,5 +129,4 @@ def _why(path: list[str], reason: str) -> str:
     return (f"after {more}{steps}: {reason}" if path else reason)
 
 
-__all__ = ["FORMAT", "VERSION", "Policy", "PolicyNode", "call_str", "explain_failure",
-           "extract", "timeline"]
+__all__ = ["explain_failure", "extract"]

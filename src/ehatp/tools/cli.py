@@ -19,9 +19,9 @@ from rich.text import Text
 
 from .. import __version__
 from ..model.problem import Problem, load
+from ..policy_format import Policy
 from ..search.andor import Stats
 from ..search.planner import Result, solve
-from ..search.policy import Policy
 from . import bench as bench_mod
 from .common import EXIT_NO_POLICY, EXIT_OK, die, user_errors
 from .show import fmt_cost, plain, policy_lines, print_rich

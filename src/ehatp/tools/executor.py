@@ -19,7 +19,7 @@ from ..errors import EhatpError
 from ..model.formula import conj
 from ..model.grounding import FINISH, Grounded, ground_problem
 from ..model.problem import Cost, Problem
-from ..search.policy import Policy, PolicyNode
+from ..policy_format import Policy, PolicyNode
 
 MAX_WORLDS_LISTED = 8
 
@@ -412,21 +412,8 @@ class Executor:
                                  "the policy does not fit this problem, solve it again")
 
     def _action(self, m: Move) -> Action:
-        g = self.grounded
-        agent = self.sem.names[m.agent]
-        if m.op >= 0:
-            op = (g.robot.ops if m.agent == ROBOT else g.human.ops)[m.op]
-            name, args = op.schema, tuple(op.args)
-        elif m.kind == INFORM:
-            t = self.state.true
-            name = INFORM
-            args = tuple(g.atoms[i] if t >> i & 1 else f"not {g.atoms[i]}"
-                         for i in bits_of(m.atoms))
-        elif m.kind == ASK:
-            name, args = ASK, (m.label[len("ask("):-1],)
-        else:
-            name, args = m.kind, ()
-        return Action(agent, m.kind, m.label, name, args, m.cost)
+        name, args, label = self.sem.describe(m)
+        return Action(self.sem.names[m.agent], m.kind, label, name, args, m.cost)
 
     def _agenda(self, ag: tuple[int, ...]) -> list[str]:
         return [self.grounded.task_names[t] for t in ag if t != FINISH]

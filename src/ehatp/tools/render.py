@@ -28,7 +28,7 @@ import graphviz  # type: ignore[import-untyped]
 import typer
 
 from ..errors import InputError
-from ..search.policy import Policy, PolicyNode
+from ..policy_format import Policy, PolicyNode
 from .common import die, user_errors
 
 DEFAULT_MAX_NODES = 400  # more than this and a drawing stops being readable

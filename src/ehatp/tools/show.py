@@ -14,7 +14,7 @@ from typing import Any
 from rich.console import Console
 from rich.text import Text
 
-from ..search.policy import Policy, PolicyNode, timeline
+from ..policy_format import Policy, PolicyNode, timeline
 
 COMM_KINDS = ("inform", "ask")
 

@@ -21,7 +21,7 @@ import typer
 from ..epistemic.semantics import Move
 from ..errors import InputError
 from ..model.problem import Cost, Problem, load
-from ..search.policy import Policy
+from ..policy_format import Policy
 from .common import user_errors
 from .executor import ExecutionError, Executor, PolicyMismatch, UncoveredHumanAction
 
