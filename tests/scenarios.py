@@ -4,7 +4,19 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 
-from ehatp import HIDDEN, INFERABLE, BeliefWorld, Costs, Domain, Options, Problem, Var, observable
+from ehatp import (
+    HIDDEN,
+    INFERABLE,
+    BeliefWorld,
+    Communication,
+    Costs,
+    Domain,
+    HumanModel,
+    Objective,
+    Problem,
+    Var,
+    observable,
+)
 from ehatp.epistemic.semantics import Semantics
 from ehatp.epistemic.state import EState
 from ehatp.model.grounding import ground_problem
@@ -60,7 +72,8 @@ def problem(domain: Domain, *, init: Iterable[str], robot: Iterable[str] = (),
             human: Iterable[str] = (), objects: Mapping[str, list[str]] | None = None,
             K: int = 2, starts: str = "human",
             beliefs: Iterable[tuple[Iterable[str], Iterable[str]]] | None = None,
-            costs: Costs | None = None, options: Options | None = None,
+            costs: Costs | None = None, human_model: HumanModel | None = None,
+            communication: Communication | None = None, objective: Objective | None = None,
             goal: Iterable[str] = ()) -> Problem:
     def atom(s: str) -> tuple[str, tuple[str, ...]]:
         c = parse_call(s)
@@ -74,7 +87,8 @@ def problem(domain: Domain, *, init: Iterable[str], robot: Iterable[str] = (),
         objects=dict(objects) if objects is not None else {"item": ["a", "b", "s1", "s2", "s3"]},
         init=frozenset(map(atom, init)), robot_agenda=tuple(map(atom, robot)),
         human_agenda=tuple(map(atom, human)), beliefs=worlds, starts=starts, K=K,
-        costs=costs or Costs(), options=options or Options(),
+        costs=costs or Costs(), human=human_model or HumanModel(),
+        communication=communication or Communication(), objective=objective or Objective(),
         goal=tuple((not g.startswith("not "), atom(g.removeprefix("not "))) for g in goal))
 
 

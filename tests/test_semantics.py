@@ -5,7 +5,7 @@ from __future__ import annotations
 from fractions import Fraction
 
 import ehatp
-from ehatp import Costs, Options
+from ehatp import Costs, HumanModel
 from ehatp.epistemic.semantics import INFORM
 
 from .scenarios import lab_domain, labels, problem, walk, world_atoms
@@ -151,7 +151,7 @@ def test_blocked_human_may_pass_after_a_wait_unless_told_to_ask() -> None:
                 starts="robot")
     sem, es = walk(problem(lab_domain(), **base), "wait")  # type: ignore[arg-type]
     assert labels(sem, es) == ["ask(secret(a))", "pass"]
-    sem, es = walk(problem(lab_domain(), options=Options(human_passes_when_blocked=False),
+    sem, es = walk(problem(lab_domain(), human_model=HumanModel(passes_when_blocked=False),
                            **base), "wait")  # type: ignore[arg-type]
     assert labels(sem, es) == ["ask(secret(a))"]
 

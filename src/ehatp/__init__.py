@@ -23,7 +23,17 @@ from .model.domain import (
     when,
 )
 from .model.formula import FALSE, TRUE, Var, eq, exists, forall
-from .model.problem import BeliefWorld, Costs, Limits, Options, Problem, load
+from .model.options import (
+    Communication,
+    HumanModel,
+    InformWhere,
+    Objective,
+    ObjectiveKind,
+    Passes,
+    Relevance,
+    Speech,
+)
+from .model.problem import BeliefWorld, Costs, Limits, Problem, load
 from .policy_format import Policy
 
 if TYPE_CHECKING:
@@ -55,8 +65,10 @@ def __getattr__(name: str) -> object:
 
 
 __all__ = [
+    "Communication", "HumanModel", "InformWhere", "Objective", "ObjectiveKind", "Passes",
+    "Relevance", "Speech",
     "FALSE", "HIDDEN", "INFERABLE", "TRUE", "AgentModel", "BeliefWorld", "Costs", "Domain",
-    "DomainError", "EhatpError", "ExecutionError", "Executor", "InputError", "Limits", "Options",
+    "DomainError", "EhatpError", "ExecutionError", "Executor", "InputError", "Limits",
     "Policy", "PolicyMismatch", "Problem", "Result", "UncoveredHumanAction", "Var", "eq", "exists",
     "for_each", "forall", "load", "observable", "solve", "validate", "when",
 ]

@@ -44,9 +44,10 @@ class PolicyNode:
     robot_agenda: list[str]
     human_agenda: list[str]
     to_move: str | None  # who moves next (None at a goal leaf)
-    value: Cost  # worst-case cost from here to the end
+    value: Cost  # cost from here to the end, under the policy's objective
     goal: bool
     children: list[int] = field(default_factory=list)
+    told: list[str] = field(default_factory=list)  # literals said with an action (speech)
 
     def to_dict(self) -> dict[str, Any]:
         d = {k: v for k, v in self.__dict__.items()}
@@ -69,6 +70,10 @@ class Policy:
     optimal: bool = True
     stats: dict[str, Any] = field(default_factory=dict)
     after: list[str] = field(default_factory=list)  # the fixed opening the root follows
+    # {"kind": "worst-case" | "expected", "weights": {...}, "ties": [...]}
+    objective: dict[str, Any] = field(default_factory=lambda: {"kind": "worst-case"})
+    worst_case: Cost | None = None  # the policy's worst-case cost (None: not recorded)
+    expected: Cost | None = None  # its expected cost over human choices
 
     @property
     def root(self) -> PolicyNode:
@@ -99,6 +104,9 @@ class Policy:
             "agents": self.agents, "K": self.K, "costs": self.costs, "cost": num(self.cost),
             "communications": self.communications, "leaves": self.leaves,
             "optimal": self.optimal, "stats": self.stats, "after": self.after,
+            "objective": self.objective,
+            "worst_case": None if self.worst_case is None else num(self.worst_case),
+            "expected": None if self.expected is None else num(self.expected),
             "nodes": [n.to_dict() for n in self.nodes], "timelines": self.timelines(),
         }
 
@@ -117,7 +125,8 @@ class Policy:
         nodes = [PolicyNode(**{k: v for k, v in n.items()}) for n in d["nodes"]]
         return cls(d["problem"], d["domain"], d["agents"], d["K"], d["costs"], nodes, d["cost"],
                    d["communications"], d["leaves"], d.get("optimal", True), d.get("stats", {}),
-                   d.get("after", []))
+                   d.get("after", []), d.get("objective", {"kind": "worst-case"}),
+                   d.get("worst_case"), d.get("expected"))
 
     @classmethod
     def read(cls, path: str | Path) -> Policy:

@@ -367,7 +367,7 @@ class _Semantics:
         after_wait = es.passive > 0  # the robot's last move was a wait
         if cop:
             may_pass = not (after_wait and certain)
-            if after_wait and asks and not self.p.options.human_passes_when_blocked:
+            if after_wait and asks and not self.p.human.passes_when_blocked:
                 may_pass = False
         else:
             may_pass = not certain
@@ -411,7 +411,7 @@ class _Semantics:
         if not (hd or rd):
             return "the divergence is not relevant (the human's and the anticipated robot's " \
                    "options on W equal those on T)"
-        limit = self.p.options.inform_max_atoms
+        limit = self.p.communication.inform_max_atoms
         if len(atoms) > limit:
             return f"informs {len(atoms)} atoms, more than inform_max_atoms = {limit}"
         cands = _bits(div)

@@ -1,0 +1,185 @@
+"""The problem options that choose a human model, a communication model and an objective
+(docs/semantics.md §4-§7, docs/problem-format.md): explicit, documented choices with the
+defaults that give the policies a user would draw by hand.
+
+Reading them from TOML is here too, so the problem loader stays one table per concern.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from enum import StrEnum
+from fractions import Fraction
+from typing import Any, Protocol
+
+from ..errors import InputError
+
+
+class Passes(StrEnum):
+    """When the human's ``pass`` right after a robot ``wait`` need not be covered (§4)."""
+
+    FAIR = "fair"  # only after a wait the robot could not avoid (nothing real to do)
+    PROTOTYPE = "prototype"  # after any robot wait (the authors' prototype)
+
+
+class InformWhere(StrEnum):
+    """Where the robot may inform (§5)."""
+
+    COPRESENT = "copresent"
+    ANYWHERE = "anywhere"  # a call, a screen: heard while apart, nothing else witnessed
+
+
+class Speech(StrEnum):
+    """What an inform takes (§5)."""
+
+    TURN = "turn"  # the robot's whole turn
+    WITH_ACTION = "with-action"  # said while acting (or waiting), in the same turn
+
+
+class Relevance(StrEnum):
+    """Which divergences make an inform worth offering (§5)."""
+
+    NEXT = "next"  # those that change the next options
+    PLAN = "plan"  # also those that make a later step of the human's agenda fail or differ
+
+
+class ObjectiveKind(StrEnum):
+    """What the policy's cost is (§6-§7)."""
+
+    WORST_CASE = "worst-case"
+    EXPECTED = "expected"
+
+
+TIE_KEYS = ("communications", "passes", "length", "worst-case", "expected")
+DEFAULT_TIES = ("communications", "passes", "length")
+
+
+@dataclass(frozen=True)
+class HumanModel:
+    """``[human]``: how the uncontrollable agent behaves and reasons."""
+
+    passes: Passes = Passes.FAIR
+    # a human blocked by uncertainty may silently pass after a robot wait (the paper's trace b)
+    passes_when_blocked: bool = True
+    # the human imagines what the robot does unseen (the product of anticipated events)
+    anticipates: bool = True
+
+
+@dataclass(frozen=True)
+class Communication:
+    """``[communication]``: how the robot may talk and the human may ask."""
+
+    inform: InformWhere = InformWhere.COPRESENT
+    speech: Speech = Speech.TURN
+    relevance: Relevance = Relevance.NEXT
+    ask: bool = True
+    inform_max_atoms: int = 3  # largest informing set tried (subsets by increasing size)
+    plan_horizon: int = 8  # human steps looked ahead by relevance = "plan"
+
+
+@dataclass(frozen=True)
+class Objective:
+    """``[objective]``: the cost a policy minimises, and the tie-breaks after it."""
+
+    kind: ObjectiveKind = ObjectiveKind.WORST_CASE
+    # relative weights of human moves for "expected", keyed by move label or action name
+    weights: Mapping[str, Fraction] = field(default_factory=dict)
+    ties: tuple[str, ...] = DEFAULT_TIES
+
+    def weight(self, label: str, name: str) -> Fraction:
+        """A human move's relative weight: by its label, else its action name, else 1."""
+        w = self.weights.get(label)
+        if w is None:
+            w = self.weights.get("".join(label.split()))
+        if w is None:
+            w = self.weights.get(name, Fraction(1))
+        return w
+
+
+class _Reader(Protocol):
+    def err(self, place: str, problem: str, fix: str = "",
+            needle: str | None = None) -> InputError: ...
+
+    def table(self, data: Mapping[str, Any], key: str, allowed: set[str],
+              required: bool = False) -> dict[str, Any]: ...
+
+
+def _choice(r: _Reader, table: str, t: Mapping[str, Any], key: str,
+            enum: type[StrEnum], default: StrEnum) -> Any:
+    v = t.get(key, default.value)
+    values = [e.value for e in enum]
+    if v not in values:
+        raise r.err(f"[{table}] {key}", f"unknown value {v!r}",
+                    "use one of " + ", ".join(f'"{x}"' for x in values), key)
+    return enum(v)
+
+
+def _flag(r: _Reader, place: str, key: str, v: Any) -> bool:
+    if not isinstance(v, bool):
+        raise r.err(place, f"expected true or false, got {v!r}", "write true or false", key)
+    return v
+
+
+def _count(r: _Reader, place: str, key: str, v: Any) -> int:
+    if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+        raise r.err(place, f"expected a whole number of at least 1, got {v!r}",
+                    "write e.g. 3", key)
+    return v
+
+
+def read_options(r: _Reader, data: Mapping[str, Any]
+                 ) -> tuple[HumanModel, Communication, Objective, tuple[str, ...]]:
+    """The ``[human]``, ``[communication]`` and ``[objective]`` tables (and the deprecated
+    ``[options]`` spellings, with a one-line note each)."""
+    notes: list[str] = []
+    old = r.table(data, "options", {"human_passes_when_blocked", "inform_max_atoms"})
+    h = r.table(data, "human", {"passes", "passes_when_blocked", "anticipates"})
+    c = r.table(data, "communication", {"inform", "speech", "relevance", "ask",
+                                        "inform_max_atoms", "plan_horizon"})
+    o = r.table(data, "objective", {"kind", "weights", "ties"})
+    for key, new_table, new_key, target in (
+            ("human_passes_when_blocked", "human", "passes_when_blocked", h),
+            ("inform_max_atoms", "communication", "inform_max_atoms", c)):
+        if key in old:
+            if new_key in target:
+                raise r.err(f"[options] {key}", f"given twice (also as [{new_table}] "
+                            f"{new_key})", "keep only the new spelling", key)
+            target[new_key] = old[key]
+            notes.append(f"[options] {key} is deprecated: write [{new_table}] {new_key}")
+    human = HumanModel(
+        _choice(r, "human", h, "passes", Passes, Passes.FAIR),
+        _flag(r, "[human] passes_when_blocked", "passes_when_blocked",
+              h.get("passes_when_blocked", True)),
+        _flag(r, "[human] anticipates", "anticipates", h.get("anticipates", True)))
+    comm = Communication(
+        _choice(r, "communication", c, "inform", InformWhere, InformWhere.COPRESENT),
+        _choice(r, "communication", c, "speech", Speech, Speech.TURN),
+        _choice(r, "communication", c, "relevance", Relevance, Relevance.NEXT),
+        _flag(r, "[communication] ask", "ask", c.get("ask", True)),
+        _count(r, "[communication] inform_max_atoms", "inform_max_atoms",
+               c.get("inform_max_atoms", 3)),
+        _count(r, "[communication] plan_horizon", "plan_horizon", c.get("plan_horizon", 8)))
+    weights_t = o.get("weights", {})
+    if not isinstance(weights_t, dict):
+        raise r.err("[objective] weights", "weights must be a table",
+                    "write [objective.weights] with e.g. pass = 0.5", "weights")
+    weights: dict[str, Fraction] = {}
+    for k, v in weights_t.items():
+        if isinstance(v, bool) or not isinstance(v, int | float) or v <= 0:
+            raise r.err(f"[objective.weights] {k}", f"expected a positive number, got {v!r}",
+                        "give a relative weight greater than 0, e.g. 0.5", k)
+        weights["".join(k.split())] = Fraction(str(v))
+    ties = o.get("ties", list(DEFAULT_TIES))
+    if (not isinstance(ties, list) or not all(isinstance(t, str) for t in ties)
+            or any(t not in TIE_KEYS for t in ties) or len(set(ties)) != len(ties)):
+        raise r.err("[objective] ties", f"bad tie-breaks {ties!r}",
+                    "give distinct names from " + ", ".join(f'"{t}"' for t in TIE_KEYS),
+                    "ties")
+    objective = Objective(_choice(r, "objective", o, "kind", ObjectiveKind,
+                                  ObjectiveKind.WORST_CASE), weights, tuple(ties))
+    return human, comm, objective, tuple(notes)
+
+
+__all__ = ["DEFAULT_TIES", "TIE_KEYS", "Communication", "HumanModel", "InformWhere",
+           "Objective", "ObjectiveKind", "Passes", "Relevance", "Speech", "read_options"]
