@@ -1,0 +1,834 @@
+"""Random small problems, and the planner/validator agreement check run on them.
+
+``draw(seed)`` gives a :class:`Spec`, plain immutable data drawn with ``random.Random(seed)``;
+``build(spec)`` turns it into an :class:`ehatp.Problem` with its :class:`ehatp.Domain`. The same
+seed always gives the same problem, on every machine, so a seed is a complete bug report:
+
+>>> from ehatp.tools import randomgen
+>>> problem = randomgen.problem(42)
+>>> print(randomgen.draw(42).describe())           # doctest: +SKIP
+
+What a spec draws (probabilities are per problem unless said otherwise):
+
+- **Atoms.** ``home`` (the human is at home; always observable), 2-5 generic atoms ``a0..``,
+  and with probability 0.5 two items ``x``, ``y`` with ``mark(i)`` (a robot puts a mark the
+  human may take) and the static ``glass(i)``. Each generic atom's observability class is
+  drawn: observable always (0.15), only when together (0.3), when the human is home (0.1),
+  when the human is away (0.05), inferable (0.2), hidden (0.2); ``mark`` is visible when home
+  and the item is glass (0.4), together (0.2), inferable or hidden (0.2 each).
+- **Co-presence** is ``home`` (0.75) or ``home and aK`` (0.25: a door the agents may close).
+- **Operators.** 1-3 generic robot and human operators: 0-2 precondition literals, 1-2 effect
+  literals, a conditional effect (0.15), a done-condition (0.15), cost 1-3 (mostly 1). The
+  human also has ``leave``/``back``, and ``take(i)`` (0.5 with items); the robot ``put(i)``
+  (0.6 with items).
+- **Tasks.** The robot's ``job`` (done-condition 0.35; 1-2 methods with a precondition 0.35,
+  one with a free item parameter 0.25) and ``sub`` (0.5), ``fetch(i)`` (0.3 with ``put``); the
+  human's ``chore`` whose methods go on a trip (leave, up to two actions away, back, then
+  more) with probability 0.55 each. Agendas hold 1-3 tasks.
+- **M_R^H** is M_R itself (0.35), an equal copy (0.05), or M_R changed 1-3 times: an operator
+  dropped (with the methods using it), an extra operator the robot does not have (used by an
+  extra method), a method dropped or added, an operator's precondition or effects redrawn, a
+  task dropped, a done-condition added or removed, or only the top task with a done-condition.
+- **Beliefs.** One true world (0.35), one world with 1-2 false beliefs (0.3), or 2-3 worlds
+  (uncertainty); each world flips 0-2 atoms and attributes another robot agenda with
+  probability 0.25 (empty, shortened, or different).
+- **Goal literals** (0.3), an action cost override (0.15), and the problem's settings
+  (:data:`SETTINGS`): who starts (even), K in 0..4 (weights 1, 3, 3, 2, 1), the costs of
+  inform (1-5 or 1.5), ask (1-5), wait (1, 2 or 0.5) and pass (1 or 2), whether a blocked
+  human passes silently (0.75), the largest informing set (3, or 2 or 1 at 1/6 each).
+
+Settings are drawn in one place, :data:`SETTINGS`, a dict from ``"table.field"`` to a sampler;
+each is drawn from its own generator (seeded by the seed and the key), so adding a setting
+changes no other draw. :data:`TABLES` says how a table becomes part of the :class:`Problem`.
+
+:func:`check` solves, validates and (on a sample) re-solves one seed; ``benchmarks/
+agreement.py`` and ``tests/test_agreement.py`` both run it through :func:`run`.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import random
+import time
+import traceback
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+from ..model.domain import (
+    HIDDEN,
+    INFERABLE,
+    AgentModel,
+    Domain,
+    Effect,
+    Observability,
+    observable,
+    when,
+)
+from ..model.formula import TRUE, Atom, Formula, Var, conj
+from ..model.options import Communication, HumanModel, Objective
+from ..model.problem import BeliefWorld, Costs, Problem
+
+ITEMS = ("x", "y")
+Lit = tuple[str, bool]  # ("a0", True), ("mark(?i)", False): "?i" is the item parameter
+FIT = "?fit"  # a condition still to be fitted to the intended run
+
+# --- settings: the one place where the problem's options and costs are drawn -----------------
+
+Sampler = Callable[[random.Random], object]
+
+
+def _weighted(pairs: Sequence[tuple[object, float]]) -> Sampler:
+    values, weights = [v for v, _ in pairs], [w for _, w in pairs]
+    return lambda r: r.choices(values, weights)[0]
+
+
+SETTINGS: dict[str, Sampler] = {
+    "problem.starts": _weighted([("human", 1), ("robot", 1)]),
+    "problem.K": _weighted([(0, 1), (1, 3), (2, 3), (3, 2), (4, 1)]),
+    "costs.inform": _weighted([(1, 4), (2, 2), (3, 1), (4, 1), (5, 1), (1.5, 1)]),
+    "costs.ask": _weighted([(1, 4), (2, 2), (3, 1), (5, 1)]),
+    "costs.wait": _weighted([(1, 6), (2, 1), (0.5, 1)]),
+    "costs.pass_": _weighted([(1, 6), (2, 1)]),
+    "human.passes_when_blocked": _weighted([(True, 3), (False, 1)]),
+    "communication.inform_max_atoms": _weighted([(3, 4), (2, 1), (1, 1)]),
+}
+"""``"table.field"`` -> sampler. Add a problem setting with one line here (and, for a new
+table, one line in :data:`TABLES`); a field not drawn keeps its default."""
+
+TABLES: dict[str, Callable[[dict[str, Any]], dict[str, Any]]] = {
+    "problem": lambda kw: kw,
+    "costs": lambda kw: {"costs": Costs(**kw)},
+    "human": lambda kw: {"human": HumanModel(**kw)},
+    "communication": lambda kw: {"communication": Communication(**kw)},
+    "objective": lambda kw: {"objective": Objective(**kw)},
+}
+"""How the drawn fields of a table become keyword arguments of :class:`Problem`."""
+
+
+def draw_settings(seed: int) -> tuple[tuple[str, object], ...]:
+    """Every setting of :data:`SETTINGS`, each from its own generator."""
+    return tuple((key, SETTINGS[key](random.Random(f"{seed}:{key}"))) for key in sorted(SETTINGS))
+
+
+# --- the spec: plain data ---------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class OpSpec:
+    """An operator; ``param`` makes it take the item ``?i``."""
+
+    name: str
+    param: bool = False
+    pre: tuple[Lit, ...] = ()
+    eff: tuple[Lit, ...] = ()
+    cond: tuple[tuple[Lit, tuple[Lit, ...]], ...] = ()  # when(lit, effects)
+    cost: int = 1
+    done: tuple[Lit, ...] | None = None
+
+
+@dataclass(frozen=True)
+class TaskSpec:
+    name: str
+    param: bool = False
+    done: tuple[Lit, ...] | None = None
+
+
+@dataclass(frozen=True)
+class MethodSpec:
+    """A method; ``free`` gives it its own item parameter ``?i`` (one alternative per item).
+    Subtasks are written ``"r0"``, ``"put(x)"`` or ``"put(?i)"``."""
+
+    task: str
+    name: str
+    pre: tuple[Lit, ...] = ()
+    subtasks: tuple[str, ...] = ()
+    free: bool = False
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    ops: tuple[OpSpec, ...]
+    tasks: tuple[TaskSpec, ...] = ()
+    methods: tuple[MethodSpec, ...] = ()
+
+    def op(self, name: str) -> OpSpec | None:
+        return next((o for o in self.ops if o.name == name), None)
+
+    def names(self) -> set[str]:
+        return {o.name for o in self.ops} | {t.name for t in self.tasks}
+
+
+@dataclass(frozen=True)
+class WorldSpec:
+    """A world the human entertains: the atoms it has wrong, the robot agenda it assumes."""
+
+    flips: tuple[str, ...] = ()
+    robot_agenda: tuple[str, ...] | None = None
+
+
+@dataclass(frozen=True)
+class Spec:
+    seed: int
+    atoms: tuple[tuple[str, str], ...]  # (atom, observability kind)
+    items: bool
+    glass: tuple[str, ...]
+    door: str | None  # co-presence is home, or home and this atom
+    robot: ModelSpec
+    human: ModelSpec
+    robot_seen: ModelSpec | None  # None: M_R^H is M_R itself
+    mutations: tuple[str, ...]
+    init: tuple[str, ...]
+    worlds: tuple[WorldSpec, ...]
+    robot_agenda: tuple[str, ...]
+    human_agenda: tuple[str, ...]
+    goal: tuple[Lit, ...]
+    action_costs: tuple[tuple[str, int], ...]
+    settings: tuple[tuple[str, object], ...] = field(default=())
+
+    def setting(self, key: str) -> object:
+        return dict(self.settings)[key]
+
+    def describe(self) -> str:
+        """The spec, readable: what to look at when a seed fails."""
+        def lits(ls: Iterable[Lit] | None) -> str:
+            return " & ".join(a if v else f"~{a}" for a, v in ls or ()) or "true"
+
+        def model(m: ModelSpec) -> list[str]:
+            out = []
+            for o in m.ops:
+                extra = "".join(f" when {lits([c])}: {lits(e)};" for c, e in o.cond)
+                done = f" done {lits(o.done)}" if o.done is not None else ""
+                out.append(f"  op {o.name}{'(?i)' if o.param else ''}: pre {lits(o.pre)}; "
+                           f"eff {lits(o.eff)};{extra} cost {o.cost}{done}")
+            for t in m.tasks:
+                done = f" done {lits(t.done)}" if t.done is not None else ""
+                out.append(f"  task {t.name}{'(?i)' if t.param else ''}{done}")
+            for me in m.methods:
+                out.append(f"  method {me.task}.{me.name}{'[?i free]' if me.free else ''}: "
+                           f"pre {lits(me.pre)} -> {', '.join(me.subtasks)}")
+            return out
+
+        cop = "home" + (f" & {self.door}" if self.door else "")
+        lines = [f"seed {self.seed}",
+                 "atoms: " + ", ".join(f"{a}:{k}" for a, k in self.atoms),
+                 f"items: {list(ITEMS) if self.items else []} glass {list(self.glass)}",
+                 f"copresence: {cop}", "M_R:", *model(self.robot), "M_H:", *model(self.human)]
+        if self.robot_seen is None:
+            lines.append("M_R^H: M_R")
+        else:
+            lines += [f"M_R^H ({', '.join(self.mutations) or 'copy'}):",
+                      *model(self.robot_seen)]
+        lines += [f"init: {list(self.init)}",
+                  *(f"world {i}: flips {list(w.flips)}"
+                    + ("" if w.robot_agenda is None else f", robot agenda {list(w.robot_agenda)}")
+                    for i, w in enumerate(self.worlds)),
+                  f"agendas: robot {list(self.robot_agenda)}, human {list(self.human_agenda)}",
+                  f"goal: {lits(self.goal)}", f"action costs: {dict(self.action_costs)}",
+                  "settings: " + ", ".join(f"{k}={v}" for k, v in self.settings)]
+        return "\n".join(lines)
+
+
+# --- drawing ----------------------------------------------------------------------------------
+
+OBS_KINDS = (("always", 0.15), ("together", 0.3), ("home", 0.1), ("away", 0.05),
+             ("inferable", 0.2), ("hidden", 0.2))
+MARK_KINDS = (("glass", 0.4), ("together", 0.2), ("inferable", 0.2), ("hidden", 0.2))
+MUTATIONS = (("drop_op", 2), ("extra_op", 2), ("drop_method", 2), ("extra_method", 2),
+             ("change_pre", 3), ("change_eff", 1), ("drop_task", 1), ("toggle_done", 1),
+             ("top_only", 1))
+"""How M_R^H may differ from M_R, with relative weights (see :meth:`_Drawer.mutate`)."""
+
+
+class _Drawer:
+    """Draws one spec.
+
+    The structure (atoms, effects, methods, agendas) is random. Then one *intended run* is
+    simulated: each agenda decomposed with a random method per task, the two interleaved at
+    random. Preconditions, task done-conditions and goal literals are fitted to it, preferring
+    literals the run changed, so that most problems have a solution in which one agent needs
+    the other's work. One fitted precondition in five gets an extra random literal (the run
+    may then block: unsolvable problems are drawn too). A structure whose intended run breaks
+    a fixed precondition (``put``, ``take``, ``leave``, ``back``) is redrawn, up to 3 times.
+    """
+
+    def __init__(self, seed: int) -> None:
+        self.r = random.Random(seed)
+        self.seed = seed
+
+    def pick(self, pairs: Sequence[tuple[str, float]]) -> str:
+        return self.r.choices([v for v, _ in pairs], [w for _, w in pairs])[0]
+
+    def chance(self, p: float) -> bool:
+        return self.r.random() < p
+
+    def lits(self, atoms: Sequence[str], lo: int, hi: int) -> tuple[Lit, ...]:
+        n = min(self.r.randint(lo, hi), len(atoms))
+        return tuple((a, self.chance(0.5)) for a in sorted(self.r.sample(list(atoms), n)))
+
+    def among(self, cands: list[Lit], changed: Callable[[Lit], bool], n: int) -> tuple[Lit, ...]:
+        """``n`` of ``cands`` (fewer if short), three times likelier when ``changed``."""
+        cands = list(cands)
+        weights = [3 if changed(c) else 1 for c in cands]
+        out: list[Lit] = []
+        for _ in range(min(n, len(cands))):
+            k = self.r.choices(range(len(cands)), weights)[0]
+            out.append(cands.pop(k))
+            weights.pop(k)
+        return tuple(sorted(out))
+
+    def cost(self) -> int:
+        return self.r.choices([1, 2, 3], [6, 2, 1])[0]
+
+    def op(self, name: str, atoms: Sequence[str], pre: tuple[Lit, ...] = ()) -> OpSpec:
+        """An operator with random effects (its precondition is fitted later)."""
+        eff = self.lits(atoms, 1, 2)
+        cond: tuple[tuple[Lit, tuple[Lit, ...]], ...] = ()
+        if self.chance(0.15):
+            cond = ((self.lits(atoms, 1, 1)[0], self.lits(atoms, 1, 1)),)
+        return OpSpec(name, False, pre, eff, cond, self.cost(),
+                      (eff[0],) if self.chance(0.15) else None)
+
+    def body(self, pool: Sequence[str], lo: int, hi: int) -> tuple[str, ...]:
+        return tuple(self.r.choice(pool) for _ in range(self.r.randint(lo, hi)))
+
+    def fit_later(self, p: float) -> tuple[Lit, ...] | None:
+        """A placeholder for a condition fitted to the intended run (with probability p)."""
+        return ((FIT, True),) if self.chance(p) else None
+
+    def spec(self) -> Spec:
+        for _ in range(3):
+            spec = self.attempt()
+            if spec is not None:
+                return spec
+        spec = self.attempt(accept=True)
+        assert spec is not None
+        return spec
+
+    def attempt(self, accept: bool = False) -> Spec | None:
+        r = self.r
+        atoms = [(f"a{k}", self.pick(OBS_KINDS)) for k in range(r.randint(2, 5))]
+        generic = [a for a, _ in atoms]
+        items = self.chance(0.5)
+        if items:
+            atoms.append(("mark(?i)", self.pick(MARK_KINDS)))
+        glass = tuple(i for i in ITEMS if self.chance(0.5)) if items else ()
+        door = r.choice(generic) if self.chance(0.25) else None
+        fluents = generic + ([f"mark({i})" for i in ITEMS] if items else [])
+
+        # the robot: r0.., put(i); job, sub, fetch(i)
+        r_ops = [self.op(f"r{k}", generic) for k in range(r.randint(1, 3))]
+        if items and self.chance(0.6):
+            r_ops.append(OpSpec("put", True, (("mark(?i)", False),), (("mark(?i)", True),),
+                                cost=self.cost(),
+                                done=(("mark(?i)", True),) if self.chance(0.6) else None))
+        has_put = any(o.name == "put" for o in r_ops)
+        r_prims = [o.name for o in r_ops if not o.param] + (["put(x)", "put(y)"] if has_put
+                                                             else [])
+        tasks = [TaskSpec("job", False, self.fit_later(0.35))]
+        methods: list[MethodSpec] = []
+        if self.chance(0.5):
+            tasks.append(TaskSpec("sub", False, self.fit_later(0.25)))
+            for k in range(r.randint(1, 2)):
+                methods.append(MethodSpec("sub", f"s{k}", self.fit_later(0.3) or (),
+                                          self.body(r_prims, 1, 2)))
+        if has_put and self.chance(0.3):
+            tasks.append(TaskSpec("fetch", True, (("mark(?i)", True),)))
+            methods.append(MethodSpec("fetch", "f", (), ("put(?i)",)))
+        job_pool = r_prims + [t.name if not t.param else "fetch(x)" for t in tasks[1:]]
+        for k in range(r.choices([1, 2], [3, 2])[0]):
+            if has_put and self.chance(0.25):  # a free parameter: put any unmarked item
+                methods.append(MethodSpec("job", f"j{k}", (("mark(?i)", False),),
+                                          ("put(?i)", *self.body(job_pool, 0, 1)), free=True))
+            else:
+                methods.append(MethodSpec("job", f"j{k}", self.fit_later(0.35) or (),
+                                          self.body(job_pool, 1, 3)))
+        robot = ModelSpec(tuple(r_ops), tuple(tasks), tuple(methods))
+        agenda_pool = ["job", *job_pool]
+        robot_agenda = ("job",) if self.chance(0.6) else self.body(agenda_pool, 1, 3)
+
+        # the human: h0.., leave, back, take(i); chore
+        h_ops = [self.op(f"h{k}", generic) for k in range(r.randint(1, 3))]
+        h_ops += [OpSpec("leave", False, (("home", True),), (("home", False),)),
+                  OpSpec("back", False, (("home", False),), (("home", True),))]
+        if items and self.chance(0.5):
+            h_ops.append(OpSpec("take", True, (("mark(?i)", True),), (("mark(?i)", False),),
+                                cost=self.cost(),
+                                done=(("mark(?i)", False),) if self.chance(0.3) else None))
+        h_prims = [o.name for o in h_ops if o.name.startswith("h")] + (
+            ["take(x)", "take(y)"] if any(o.name == "take" for o in h_ops) else [])
+        home = self.chance(0.9)  # else the human starts away, and comes back first thing
+        h_methods = []
+        for k in range(r.choices([1, 2], [1, 1])[0]):
+            if self.chance(0.55):  # a trip: leave (when home), act away, come back, act
+                body: tuple[str, ...] = (*(("leave",) if home else ()),
+                                         *self.body(h_prims, 0, 2), "back",
+                                         *self.body(h_prims, 0, 2))
+            else:
+                body = (*(() if home else ("back",)), *self.body(h_prims, 1, 3))
+            h_methods.append(MethodSpec("chore", f"c{k}", self.fit_later(0.3) or (), body))
+        human = ModelSpec(tuple(h_ops), (TaskSpec("chore", False, self.fit_later(0.2)),),
+                          tuple(h_methods))
+        human_agenda = ("chore",) + ((r.choice(h_prims),) if self.chance(0.25) else ())
+
+        init = (("home",) if home else ()) + tuple(a for a in fluents if self.chance(0.35))
+        goal = self.fit_later(0.3) or ()
+        fitted = self.fit(robot, human, init, robot_agenda, human_agenda, generic, fluents,
+                          goal)
+        if fitted is None and not accept:
+            return None
+        robot, human, goal, final = fitted or (robot, human, (), frozenset(init))
+        robot_seen, mutations = self.robot_seen(robot, generic, fluents, final, init)
+        worlds = self.worlds(fluents, robot_agenda, agenda_pool)
+        ops_named = [o.name for o in r_ops + h_ops if o.name not in ("leave", "back")]
+        action_costs = ((r.choice(ops_named), r.randint(1, 3)),) if self.chance(0.15) else ()
+        return Spec(self.seed, tuple(atoms), items, glass, door, robot, human, robot_seen,
+                    mutations, init, worlds, robot_agenda, human_agenda, goal, action_costs,
+                    draw_settings(self.seed))
+
+    # -- fitting conditions to one intended run ----------------------------------------------
+
+    def fit(self, robot: ModelSpec, human: ModelSpec, init: Sequence[str],
+            robot_agenda: Sequence[str], human_agenda: Sequence[str], generic: Sequence[str],
+            fluents: Sequence[str], goal: tuple[Lit, ...]
+            ) -> tuple[ModelSpec, ModelSpec, tuple[Lit, ...], frozenset[str]] | None:
+        """The models with fitted conditions, the goal and the run's final state; None when
+        the run breaks a fixed precondition."""
+        models = (robot, human)
+        runs = [self.expand(robot, robot_agenda), self.expand(human, human_agenda)]
+        state = frozenset(init)
+        snaps: dict[tuple[int, str], list[frozenset[str]]] = {}
+        while runs[0] or runs[1]:
+            who = self.r.choice([k for k in (0, 1) if runs[k]])
+            kind, name, arg = runs[who].pop(0)
+            snaps.setdefault((who, name), []).append(state)
+            if kind == "op":
+                op = models[who].op(name)
+                assert op is not None
+                if op.done is not None and _holds(op.done, arg, state):
+                    continue
+                if (op.param or op.name in ("leave", "back")) and not _holds(op.pre, arg,
+                                                                                 state):
+                    return None
+                state = _apply(op, arg, state)
+
+        def pre(who: int, name: str, most: int) -> tuple[Lit, ...]:
+            seen = snaps.get((who, name))
+            if not seen:
+                return self.lits(generic, 0, 1)
+            first = seen[0]
+            cands = [(a, a in first) for a in generic
+                     if all((a in s) == (a in first) for s in seen)]
+            out = self.among(cands, lambda c: (c[0] in init) != c[1],
+                             self.r.randint(0 if most > 1 else 1, most))
+            if self.chance(0.2):
+                extra = self.lits(generic, 1, 1)[0]
+                if extra[0] not in {a for a, _ in out}:
+                    out = tuple(sorted((*out, extra)))
+            return out
+
+        def at_end(atoms: Sequence[str]) -> tuple[Lit, ...]:
+            return self.among([(a, a in state) for a in atoms],
+                              lambda c: (c[0] in init) != c[1], 1)
+
+        def done(t: TaskSpec) -> TaskSpec:
+            return replace(t, done=at_end(fluents)) if t.done == ((FIT, True),) else t
+
+        fitted = []
+        for who, m in enumerate(models):
+            ops = tuple(o if o.param or o.name in ("leave", "back")
+                        else replace(o, pre=pre(who, o.name, 2)) for o in m.ops)
+            meths = tuple(replace(me, pre=pre(who, f"{me.task}.{me.name}", 1))
+                          if me.pre == ((FIT, True),) else me for me in m.methods)
+            fitted.append(ModelSpec(ops, tuple(map(done, m.tasks)), meths))
+        if goal:
+            goal = self.among([(a, a in state) for a in generic],
+                              lambda c: (c[0] in init) != c[1], self.r.randint(1, 2))
+        return fitted[0], fitted[1], goal, state
+
+    def expand(self, m: ModelSpec, agenda: Sequence[str]) -> list[tuple[str, str, str]]:
+        """One decomposition of ``agenda``: ("op" | "method", name, item) in order."""
+        out: list[tuple[str, str, str]] = []
+
+        def go(calls: Sequence[str], depth: int) -> None:
+            for c in calls:
+                head, _, arg = c.partition("(")
+                arg = arg.rstrip(")")
+                if m.op(head) is not None:
+                    out.append(("op", head, arg))
+                    continue
+                ms = [me for me in m.methods if me.task == head]
+                if not ms or depth > 8:
+                    continue
+                me = self.r.choice(ms)
+                if me.free:
+                    arg = self.r.choice(ITEMS)
+                out.append(("method", f"{head}.{me.name}", arg))
+                go([s.replace("?i", arg) for s in me.subtasks], depth + 1)
+
+        go(agenda, 0)
+        return out
+
+    # -- the human's beliefs -------------------------------------------------------------------
+
+    def worlds(self, fluents: Sequence[str], agenda: tuple[str, ...],
+               pool: Sequence[str]) -> tuple[WorldSpec, ...]:
+        r = self.r
+        kind = self.pick((("true", 0.35), ("false", 0.3), ("uncertain", 0.35)))
+        if kind == "true":
+            count, lo, hi = 1, 0, 0
+        elif kind == "false":
+            count, lo, hi = 1, 1, 2
+        else:
+            count, lo, hi = r.randint(2, 3), 0, 2
+        out = []
+        for _ in range(count):
+            flips = tuple(sorted(r.sample(list(fluents), min(r.randint(lo, hi), len(fluents)))))
+            ag: tuple[str, ...] | None = None
+            if self.chance(0.25):
+                ag = r.choice([(), agenda[1:], self.body(pool, 1, 2)])
+            out.append(WorldSpec(flips, ag))
+        return tuple(out)
+
+    def robot_seen(self, robot: ModelSpec, generic: Sequence[str], fluents: Sequence[str],
+                   final: frozenset[str], init: Sequence[str]
+                   ) -> tuple[ModelSpec | None, tuple[str, ...]]:
+        """M_R^H: M_R itself, an equal copy, or M_R changed a few times."""
+        r = self.r
+        u = r.random()
+        if u < 0.35:
+            return None, ()
+        if u < 0.4:
+            return robot, ()
+        m, done = robot, []
+        end = self.among([(a, a in final) for a in fluents],
+                         lambda c: (c[0] in init) != c[1], 1)
+        for _ in range(r.choices([1, 2, 3], [5, 3, 1])[0]):
+            kind = self.pick(MUTATIONS)
+            m2 = self.mutate(m, kind, generic, end)
+            if m2 is not None:
+                m = m2
+                done.append(kind)
+        return m, tuple(done)
+
+    def mutate(self, m: ModelSpec, kind: str, generic: Sequence[str],
+               end: tuple[Lit, ...]) -> ModelSpec | None:
+        """``m`` changed once (None when the change does not apply). ``end`` is a literal
+        true at the end of the intended run, for new done-conditions."""
+        r = self.r
+        plain = [o for o in m.ops if not o.param]
+        if kind == "drop_op" and m.ops:
+            return _without(m, {r.choice(m.ops).name})
+        if kind == "extra_op":
+            task = r.choice(m.tasks) if m.tasks else None
+            if task is None or task.param or m.op("ghost"):
+                return None
+            ghost = self.op("ghost", generic, self.lits(generic, 0, 1))
+            pool = ["ghost", *(o.name for o in plain)]
+            meth = MethodSpec(task.name, "g", (), ("ghost", *self.body(pool, 0, 1)))
+            return replace(m, ops=(*m.ops, ghost), methods=(*m.methods, meth))
+        if kind == "drop_method" and m.methods:
+            i = r.randrange(len(m.methods))
+            return replace(m, methods=m.methods[:i] + m.methods[i + 1:])
+        if kind == "extra_method" and plain:
+            task = r.choice([t for t in m.tasks if not t.param] or [None])
+            if task is None:
+                return None
+            meth = MethodSpec(task.name, f"x{len(m.methods)}", self.lits(generic, 0, 1),
+                              self.body([o.name for o in plain], 1, 2))
+            return replace(m, methods=(*m.methods, meth))
+        if kind in ("change_pre", "change_eff") and plain:
+            o = r.choice(plain)
+            new = (replace(o, pre=self.lits(generic, 1, 2)) if kind == "change_pre"
+                   else replace(o, eff=self.lits(generic, 1, 2), cond=()))
+            if new == o:
+                return None
+            return replace(m, ops=tuple(new if x is o else x for x in m.ops))
+        if kind == "drop_task":
+            subs = [t for t in m.tasks if t.name != "job"]
+            return _without(m, {r.choice(subs).name}) if subs else None
+        if kind == "toggle_done" and m.tasks:
+            t = r.choice(m.tasks)
+            t2 = replace(t, done=None if t.done is not None else
+                         (("mark(?i)", True),) if t.param else end)
+            return replace(m, tasks=tuple(t2 if x is t else x for x in m.tasks))
+        if kind == "top_only":
+            job = next(t for t in m.tasks if t.name == "job")
+            return ModelSpec(m.ops, (replace(job, done=job.done or end),), ())
+        return None
+
+
+def _holds(ls: Iterable[Lit], arg: str, state: frozenset[str]) -> bool:
+    return all((a.replace("?i", arg) in state) == v for a, v in ls)
+
+
+def _apply(op: OpSpec, arg: str, state: frozenset[str]) -> frozenset[str]:
+    """``op(arg)`` on a set of true atoms (deletes before adds, conditions read before)."""
+    def name(a: str) -> str:
+        return a.replace("?i", arg)
+
+    effs = list(op.eff)
+    for (c, v), e in op.cond:
+        if (name(c) in state) == v:
+            effs += e
+    out = state - {name(a) for a, v in effs if not v}
+    return out | {name(a) for a, v in effs if v}
+
+
+def _without(m: ModelSpec, gone: set[str]) -> ModelSpec:
+    """``m`` without the named operators/tasks, their methods and the methods using them
+    (until nothing refers to a missing task)."""
+    ops = tuple(o for o in m.ops if o.name not in gone)
+    tasks = tuple(t for t in m.tasks if t.name not in gone)
+    methods = m.methods
+    while True:
+        known = {o.name for o in ops} | {t.name for t in tasks}
+        keep = tuple(me for me in methods if me.task in known
+                     and all(_head(s) in known for s in me.subtasks))
+        if keep == methods:
+            return ModelSpec(ops, tasks, keep)
+        methods = keep
+
+
+def _head(call: str) -> str:
+    return call.partition("(")[0]
+
+
+def draw(seed: int) -> Spec:
+    """The spec of seed ``seed`` (deterministic)."""
+    return _Drawer(seed).spec()
+
+
+# --- building ---------------------------------------------------------------------------------
+
+
+def build(spec: Spec, *, reverse: bool = False) -> Problem:
+    """The problem of ``spec``; ``reverse`` declares everything in the reverse order (the
+    result must not change)."""
+
+    def order(xs: Iterable[Any]) -> list[Any]:
+        xs = list(xs)
+        return xs[::-1] if reverse else xs
+
+    d = Domain(f"random-{spec.seed}")
+    Item = d.type("item")
+    i = Var("i", Item)
+    home_vis = observable(Atom("home", ()))
+    kinds: dict[str, Observability] = {
+        "always": observable(), "home": home_vis, "away": observable(~Atom("home", ())),
+        "inferable": INFERABLE, "hidden": HIDDEN,
+        "glass": observable(Atom("home", ()) & Atom("glass", (i,))),
+    }
+    cop = conj(Atom("home", ()), *([Atom(spec.door, ())] if spec.door else []))
+    kinds["together"] = observable(cop)
+    decls: list[tuple[str, tuple[Var, ...], Observability]] = [
+        ("home", (), observable())]
+    for name, kind in spec.atoms:
+        head = _head(name)
+        decls.append((head, (i,) if head != name else (), kinds[kind]))
+    if spec.items:
+        decls.append(("glass", (i,), observable()))
+    for head, params, obs in order(decls):
+        d.predicate(head, *params, observability=obs)
+    d.copresence = cop
+
+    def atom(text: str) -> Atom:
+        head, _, arg = text.partition("(")
+        if not arg:
+            return Atom(head, ())
+        a = arg.rstrip(")")
+        return Atom(head, (i if a == "?i" else a,))
+
+    def formula(ls: Iterable[Lit] | None) -> Formula:
+        parts = [atom(a) if v else ~atom(a) for a, v in ls or ()]
+        return conj(*parts) if parts else TRUE
+
+    def effects(ls: Iterable[Lit]) -> list[Effect]:
+        return [atom(a) if v else ~atom(a) for a, v in ls]
+
+    def model_of(ms: ModelSpec, m: AgentModel) -> AgentModel:
+        for t in order(ms.tasks):
+            m.task(t.name, *((i,) if t.param else ()),
+                   done=formula(t.done) if t.done is not None else None)
+        for o in order(ms.ops):
+            effs: list[Effect] = effects(o.eff)
+            effs += [when(formula([c]), *effects(e)) for c, e in o.cond]
+            m.action(o.name, *((i,) if o.param else ()), pre=formula(o.pre), effects=effs,
+                     cost=o.cost, done=formula(o.done) if o.done is not None else None)
+        for me in order(ms.methods):
+            task = m.tasks[me.task]
+            subs = []
+            for s in me.subtasks:
+                head, _, arg = s.partition("(")
+                target = m.operators.get(head) or m.tasks[head]
+                a = arg.rstrip(")")
+                subs.append(target(i if a == "?i" else a) if arg else target())
+            m.method(task, me.name, params=(i,) if me.free and not task.params else (),
+                     pre=formula(me.pre), subtasks=subs)
+        return m
+
+    model_of(spec.robot, d.robot)
+    model_of(spec.human, d.human)
+    if spec.robot_seen is not None:
+        d.robot_seen_by_human = model_of(spec.robot_seen, AgentModel(d.robot_name))
+
+    def call(text: str) -> tuple[str, tuple[str, ...]]:
+        head, _, arg = text.partition("(")
+        return head, (arg.rstrip(")"),) if arg else ()
+
+    init = set(spec.init) | {f"glass({g})" for g in spec.glass}
+    worlds = []
+    for w in spec.worlds:
+        flips = set(w.flips)
+        worlds.append(BeliefWorld(frozenset(call(a) for a in flips - init),
+                                  frozenset(call(a) for a in flips & init),
+                                  None if w.robot_agenda is None
+                                  else tuple(call(t) for t in w.robot_agenda)))
+    tables: dict[str, dict[str, Any]] = {}
+    for key, value in spec.settings:
+        table, _, name = key.partition(".")
+        tables.setdefault(table, {})[name] = value
+    tables.setdefault("costs", {})["actions"] = dict(spec.action_costs)
+    kwargs: dict[str, Any] = {}
+    for table, fields in tables.items():
+        kwargs.update(TABLES[table](fields))
+    return Problem(
+        name=f"random-{spec.seed}", domain=d, objects={"item": order(ITEMS)},
+        init=frozenset(call(a) for a in init), robot_agenda=tuple(map(call, spec.robot_agenda)),
+        human_agenda=tuple(map(call, spec.human_agenda)), beliefs=tuple(order(worlds)),
+        goal=tuple((v, call(a)) for a, v in spec.goal), **kwargs)
+
+
+def problem(seed: int, *, reverse: bool = False) -> Problem:
+    """The random problem of ``seed``."""
+    return build(draw(seed), reverse=reverse)
+
+
+# --- the agreement check ----------------------------------------------------------------------
+
+MAX_STATES = 20_000
+TIMEOUT = 4.0
+DETERMINISM_EVERY = 10
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What happened to one seed. ``kind``: solved | unsolvable | limit (the search stopped at
+    a limit: skipped) | crash (an exception) | disagreement (the validator rejects the
+    planner's policy) | nondeterministic (a second solve, or the problem declared in reverse
+    order, gives another policy). ``status`` is the planner's; ``detail`` the first line of the
+    validator's report or the exception, where it was raised."""
+
+    seed: int
+    kind: str
+    status: str = ""
+    detail: str = ""
+    checked_determinism: bool = False
+    seconds: float = 0.0
+
+    @property
+    def failed(self) -> bool:
+        return self.kind in FAILURES
+
+
+FAILURES = ("crash", "disagreement", "nondeterministic")
+KINDS = ("solved", "unsolvable", "limit", *FAILURES)
+
+
+def _where(e: BaseException) -> str:
+    tb = traceback.extract_tb(e.__traceback__)
+    last = tb[-1] if tb else None
+    at = f" (at {last.filename.rsplit('/', 1)[-1]}:{last.lineno} in {last.name})" if last else ""
+    msg = str(e).splitlines()[0] if str(e) else ""
+    return f"{type(e).__name__}: {msg}{at}"
+
+
+def check(seed: int, *, determinism: bool | None = None, max_states: int = MAX_STATES,
+          timeout: float = TIMEOUT) -> Outcome:
+    """Solve the problem of ``seed``, validate any policy the planner returns, and (when
+    ``determinism``, by default for one seed in :data:`DETERMINISM_EVERY`) solve it again and
+    declared in reverse order, expecting byte-identical policy JSON."""
+    from ..check.validator import validate
+    from ..search.planner import solve
+
+    if determinism is None:
+        determinism = seed % DETERMINISM_EVERY == 0
+    start = time.perf_counter()
+    stage = "draw"
+    status = ""
+
+    def out(kind: str, detail: str = "", checked: bool = False) -> Outcome:
+        return Outcome(seed, kind, status, detail, checked, time.perf_counter() - start)
+
+    try:
+        spec = draw(seed)
+        stage = "build"
+        prob = build(spec)
+        stage = "solve"
+        r = solve(prob, max_states=max_states, timeout=timeout)
+        status = r.status
+        if r.policy is not None:
+            stage = "validate"
+            report = validate(prob, r.policy)
+            if not report.ok:
+                return out("disagreement", report.message.splitlines()[0])
+        if r.status in ("timeout", "state-limit"):
+            return out("limit", r.reason)
+        if r.status != "solved" and r.status != "unsolvable":
+            return out("crash", f"solve: unknown status {r.status!r}")
+        if determinism:
+            first = r.policy.to_json() if r.policy is not None else r.status
+            for rev in (False, True):
+                stage = "reverse" if rev else "re-solve"
+                again = solve(build(draw(seed), reverse=rev), max_states=max_states,
+                              timeout=timeout)
+                if again.status in ("timeout", "state-limit"):
+                    continue  # a limit hit is not comparable
+                second = again.policy.to_json() if again.policy is not None else again.status
+                if second != first:
+                    what = ("solving twice" if not rev else
+                            "declaring the problem in reverse order")
+                    return out("nondeterministic", f"{what} gives another result "
+                               f"({r.status} vs {again.status})", True)
+            stage = "done"
+        return out(r.status, r.reason.splitlines()[0] if r.reason else "", determinism)
+    except Exception as e:  # noqa: BLE001 - every exception is a finding
+        return out("crash", f"{stage}: {_where(e)}")
+
+
+def _check_one(seed: int) -> Outcome:
+    return check(seed)
+
+
+def run(seeds: Iterable[int], *, jobs: int = 1,
+        on_result: Callable[[Outcome], None] | None = None) -> list[Outcome]:
+    """:func:`check` every seed, on ``jobs`` processes; the outcomes sorted by seed."""
+    seeds = list(seeds)
+    results: list[Outcome] = []
+
+    def collect(it: Iterator[Outcome]) -> None:
+        for o in it:
+            results.append(o)
+            if on_result is not None:
+                on_result(o)
+
+    if jobs <= 1 or len(seeds) <= 1:
+        collect(check(s) for s in seeds)
+    else:
+        # fork: the children share the parent's imports; one seed per task keeps load even
+        ctx = multiprocessing.get_context("fork")
+        with ctx.Pool(jobs) as pool:
+            collect(pool.imap_unordered(_check_one, seeds, chunksize=1))
+    return sorted(results, key=lambda o: o.seed)
+
+
+def summary(outcomes: Sequence[Outcome]) -> dict[str, int]:
+    """Counts by kind (every kind present, in :data:`KINDS` order)."""
+    counts = dict.fromkeys(KINDS, 0)
+    for o in outcomes:
+        counts[o.kind] += 1
+    return counts
+
+
+__all__ = ["FAILURES", "KINDS", "SETTINGS", "TABLES", "ModelSpec", "Outcome", "Spec", "build",
+           "check", "draw", "problem", "run", "summary"]
