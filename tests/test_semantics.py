@@ -5,7 +5,7 @@ from __future__ import annotations
 from fractions import Fraction
 
 import ehatp
-from ehatp import Costs, HumanModel
+from ehatp import Costs, HumanModel, Passes
 from ehatp.epistemic.semantics import INFORM
 
 from .scenarios import lab_domain, labels, problem, walk, world_atoms
@@ -138,12 +138,26 @@ def test_robot_moving_first_can_make_the_belief_true() -> None:
     assert r.policy.children(r.policy.root)[0].action == "set_secret(a)"
 
 
-def test_pass_after_a_robot_wait_is_not_covered_when_the_human_can_act() -> None:
+def test_pass_after_a_forced_robot_wait_is_not_covered_when_the_human_can_act() -> None:
+    # the robot has nothing to do: its wait is forced, and the human does not idle (§4)
     p = problem(lab_domain(), init=HOME, human=["trip(s1)"], starts="robot")
     sem, es = walk(p, "wait")
-    assert labels(sem, es) == ["go(lab, hall)"]
+    assert es.forced and labels(sem, es) == ["go(lab, hall)"]
     sem, es = walk(p)
     assert "wait" in labels(sem, es)
+
+
+def test_a_voluntary_robot_wait_takes_nothing_from_the_human() -> None:
+    # the robot could light a lamp; if it waits instead, the human may still pass (fair), so
+    # idling never gains the robot anything; the prototype rule takes the pass away
+    p = problem(lab_domain(), init=HOME, human=["trip(s1)"], robot=["set_lamp(a)"],
+                starts="robot")
+    sem, es = walk(p, "wait")
+    assert not es.forced and labels(sem, es) == ["go(lab, hall)", "pass"]
+    proto = problem(lab_domain(), init=HOME, human=["trip(s1)"], robot=["set_lamp(a)"],
+                    starts="robot", human_model=HumanModel(passes=Passes.PROTOTYPE))
+    sem, es = walk(proto, "wait")
+    assert es.forced and labels(sem, es) == ["go(lab, hall)"]
 
 
 def test_blocked_human_may_pass_after_a_wait_unless_told_to_ask() -> None:

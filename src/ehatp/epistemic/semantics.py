@@ -16,11 +16,13 @@ from typing import NamedTuple
 from ..model.formula import And, Formula, conj, ground_atoms
 from ..model.grounding import FINISH, GOp, Grounded
 from ..model.htn import Agenda, Refiner
+from ..model.options import InformWhere, Passes, Relevance, Speech
 from ..model.problem import Cost
 from .state import HUMAN, ROBOT, EState, World, Worlds, normalize, states_of
 
-ACTION, WAIT, PASS, INFORM, ASK = "action", "wait", "pass", "inform", "ask"
+ACTION, WAIT, PASS, INFORM, ASK, SILENCE = "action", "wait", "pass", "inform", "ask", "silence"
 PASSIVE = (WAIT, PASS)
+BLOCKED, HORIZON = -2, -3  # ends of a human plan other than FINISH (relevance "plan")
 DEAD_PASSIVE_RUN = 3
 
 
@@ -67,7 +69,9 @@ class Semantics:
         p = g.problem
         self.K = p.K
         self.costs = p.costs
-        self.options = p.options
+        self.human_model = p.human
+        self.comm = p.communication
+        self._plans: dict[tuple[Agenda, int, int], frozenset[tuple[int, ...]]] = {}
         self.names = (p.domain.robot_name, p.domain.human_name)
         self.R = Refiner(g.robot, g.task_names)
         self.H = Refiner(g.human, g.task_names)
@@ -105,6 +109,8 @@ class Semantics:
         if move.op >= 0:
             op = (g.robot.ops if move.agent == ROBOT else g.human.ops)[move.op]
             return Call(op.schema, tuple(op.args), move.label)
+        if move.kind == WAIT:
+            return Call(WAIT, (), move.label)
         if move.kind == INFORM:
             assert move.child is not None  # informing never fails
             return Call(INFORM, self.literals(move.child.true, move.atoms), move.label)
@@ -122,7 +128,12 @@ class Semantics:
         g = self.g
         turn = HUMAN if g.problem.starts == "human" else ROBOT
         worlds = self.assess(g.init, normalize((s, self.attributed(ag)) for s, ag in g.beliefs))
-        return EState(turn, g.init, g.robot_agenda, g.human_agenda, worlds, 0, 0)
+        worlds = self.sees_done(g.init, g.robot_agenda, worlds)
+        es = EState(turn, g.init, g.robot_agenda, g.human_agenda, worlds, 0, 0)
+        if turn == HUMAN and self.comm.speech == Speech.WITH_ACTION and self.informing_set(es):
+            # §5: the robot may speak before the human's very first move
+            es = es._replace(turn=ROBOT, opening=True)
+        return es
 
     def copresent(self, t: int) -> bool:
         c = self._cop.get(t)
@@ -188,7 +199,20 @@ class Semantics:
         return r
 
     def product(self, worlds: Worlds) -> Worlds:
+        """§4: every world followed by the noop or an event the human anticipates of the
+        robot; a non-anticipating human imagines nothing (``W`` unchanged)."""
+        if not self.human_model.anticipates:
+            return worlds
         return normalize(x for w in worlds for x in self.successors(w))
+
+    def sees_done(self, t: int, robot_agenda: Agenda, worlds: Worlds) -> Worlds:
+        """§4: a non-anticipating human co-present with a robot whose agenda can finish under
+        ``t`` sees that it is done: every world's robot agenda becomes empty."""
+        if (self.human_model.anticipates or not self.copresent(t)
+                or self.R.refine(robot_agenda, t)[:1] != ((FINISH, ()),)
+                or all(not ag for _, ag in worlds)):
+            return worlds
+        return normalize((s, ()) for s, _ in worlds)
 
     # -- goal -----------------------------------------------------------------------------
     def robot_done(self, es: EState) -> bool:
@@ -212,21 +236,46 @@ class Semantics:
         return self.robot_moves(es) if es.turn == ROBOT else self.human_moves(es)
 
     def robot_moves(self, es: EState) -> list[Move]:
+        """§4-§5: the robot's options: the first actions of its agenda (while co-present or
+        k < K), ``wait``, and ``inform`` of a smallest relevant set (while co-present, or
+        anywhere); with speech "with-action" also ``inform + action`` and ``inform + wait``;
+        at a speech opening only ``inform`` and ``silence``."""
         t, cop = es.true, self.copresent(es.true)
+        if es.opening:
+            mask = self.informing_set(es)
+            after = es._replace(turn=HUMAN, opening=False)
+            opening = [Move(ROBOT, SILENCE, SILENCE, 0, after)]
+            if mask:
+                opening.append(Move(ROBOT, INFORM, self.inform_label(t, mask), self.costs.inform,
+                                    self.inform(after._replace(turn=ROBOT), mask), atoms=mask))
+            return opening
         out: list[Move] = []
-        can_act = cop or es.k < self.K
-        if can_act:
-            for op, rest in self.R.refine(es.robot_agenda, t):
-                if op != FINISH:
-                    gop = self.robot_op(op)
-                    out.append(Move(ROBOT, ACTION, gop.name, gop.cost,
-                                    self.robot_exec(es, gop, rest, cop), op))
-        out.append(Move(ROBOT, WAIT, "wait", self.costs.wait, self.robot_wait(es, cop)))
-        if cop:
+        acts: list[tuple[GOp, Agenda]] = []
+        if cop or es.k < self.K:
+            acts = [(self.robot_op(op), rest) for op, rest in self.R.refine(es.robot_agenda, t)
+                    if op != FINISH]
+        for gop, rest in acts:
+            out.append(Move(ROBOT, ACTION, gop.name, gop.cost,
+                            self.robot_exec(es, gop, rest, cop), gop.id))
+        forced = not acts or self.human_model.passes == Passes.PROTOTYPE
+        out.append(Move(ROBOT, WAIT, "wait", self.costs.wait, self.robot_wait(es, cop, forced)))
+        if cop or self.comm.inform == InformWhere.ANYWHERE:
             mask = self.informing_set(es)
             if mask:
-                out.append(Move(ROBOT, INFORM, self.inform_label(t, mask), self.costs.inform,
-                                self.inform(es, mask), atoms=mask))
+                label = self.inform_label(t, mask)
+                out.append(Move(ROBOT, INFORM, label, self.costs.inform, self.inform(es, mask),
+                                atoms=mask))
+                if self.comm.speech == Speech.WITH_ACTION:
+                    # said first, then done: the action runs from the informed worlds
+                    told = es._replace(worlds=self.observe(t, es.worlds, mask))
+                    for gop, rest in acts:
+                        out.append(Move(ROBOT, ACTION, f"{label} + {gop.name}",
+                                        self.costs.inform + gop.cost,
+                                        self.robot_exec(told, gop, rest, cop), gop.id,
+                                        atoms=mask))
+                    out.append(Move(ROBOT, WAIT, f"{label} + wait",
+                                    self.costs.inform + self.costs.wait,
+                                    self.robot_wait(told, cop, forced), atoms=mask))
         return out
 
     def robot_exec(self, es: EState, op: GOp, rest: Agenda, cop: bool) -> EState:
@@ -246,15 +295,18 @@ class Semantics:
             worlds, k = normalize(new), es.k
         else:
             worlds, k = self.product(es.worlds), es.k + 1
-        worlds = self.assess(t2, worlds)
+        worlds = self.sees_done(t2, rest, self.assess(t2, worlds))
         return EState(HUMAN, t2, rest, es.human_agenda, worlds,
                       0 if self.copresent(t2) else k, 0)
 
-    def robot_wait(self, es: EState, cop: bool) -> EState:
+    def robot_wait(self, es: EState, cop: bool, forced: bool) -> EState:
+        """§4: ``wait``; unseen, it is one of the events the human imagines. ``forced`` says
+        the robot had no real action (what the human's pass rule reads)."""
         worlds, k = es.worlds, es.k
         if not cop and k < self.K:  # unseen, the wait is one of the events the human imagines
             worlds, k = self.assess(es.true, self.product(worlds)), k + 1
-        return es._replace(turn=HUMAN, worlds=worlds, k=k, passive=es.passive + 1)
+        return es._replace(turn=HUMAN, worlds=worlds, k=k, passive=es.passive + 1,
+                           forced=forced)
 
     def human_moves(self, es: EState) -> list[Move]:
         cop = self.copresent(es.true)
@@ -266,7 +318,7 @@ class Semantics:
             if u.worlds == full:
                 if u.op != FINISH:
                     acts.append((u.op, u.rest))
-            elif cop and u.conds:
+            elif cop and u.conds and self.comm.ask:
                 phi = self.uncertain_part(conj(*u.conds), states)
                 asks.setdefault(self.show(phi), phi)
         out: list[Move] = []
@@ -275,15 +327,14 @@ class Semantics:
             out.append(self.human_exec(es, gop, rest))
         for label, phi in sorted(asks.items()):
             out.append(Move(HUMAN, ASK, f"ask({label})", self.costs.ask, self.ask(es, phi)))
-        after_wait = es.passive > 0
-        if cop:
-            may_pass = not (after_wait and (acts or (
-                asks and not self.options.human_passes_when_blocked)))
+        if cop:  # §4: no idling while a robot that has nothing to do waits for the human
+            may_pass = not (es.forced and (acts or (
+                asks and not self.human_model.passes_when_blocked)))
         else:
             may_pass = not acts
         if may_pass:
             out.append(Move(HUMAN, PASS, "pass", self.costs.pass_,
-                            es._replace(turn=ROBOT, passive=es.passive + 1)))
+                            es._replace(turn=ROBOT, passive=es.passive + 1, forced=False)))
         return out
 
     def human_exec(self, es: EState, op: GOp, rest: Agenda) -> Move:
@@ -299,7 +350,7 @@ class Semantics:
         for s, ag in es.worlds:
             s2 = op.apply(s)
             new.append(((s2 & ~inf) | (t2 & inf), ag))
-        worlds = self.assess(t2, normalize(new))
+        worlds = self.sees_done(t2, es.robot_agenda, self.assess(t2, normalize(new)))
         k = 0 if self.copresent(t2) else es.k
         return Move(HUMAN, ACTION, op.name, op.cost,
                     EState(ROBOT, t2, es.robot_agenda, rest, worlds, k, 0), op.id)
@@ -336,10 +387,13 @@ class Semantics:
             for i in ground_atoms(phi):
                 m |= 1 << i
             keep = self.observe(es.true, es.worlds, m)
-        return es._replace(turn=ROBOT, worlds=keep, passive=0)
+        return es._replace(turn=ROBOT, worlds=keep, passive=0, forced=False)
 
     def inform(self, es: EState, mask: int) -> EState:
-        return es._replace(turn=HUMAN, worlds=self.observe(es.true, es.worlds, mask), passive=0)
+        """§5: the human learns ``T``'s value of the atoms of ``mask`` (heard even while
+        apart: no world is multiplied, ``k`` does not change)."""
+        return es._replace(turn=HUMAN, worlds=self.observe(es.true, es.worlds, mask), passive=0,
+                           forced=False)
 
     def inform_label(self, t: int, mask: int) -> str:
         return f"inform({', '.join(self.literals(t, mask))})"
@@ -350,6 +404,33 @@ class Semantics:
 
     def robot_view(self, worlds: Worlds) -> frozenset[int]:
         return frozenset(op for s, ag in worlds for op, _ in self.RH.refine(ag, s))
+
+    def plans(self, agenda: Agenda, s: int) -> frozenset[tuple[int, ...]]:
+        """§5 (relevance "plan"): the sequences of human actions that refine ``agenda`` with
+        ``M_H`` from the single state ``s``, each action applied, the robot idle, up to the end
+        of the agenda (``FINISH``), a dead end (``BLOCKED``) or ``plan_horizon`` actions."""
+        return self._plans_from(agenda, s, self.comm.plan_horizon)
+
+    def _plans_from(self, agenda: Agenda, s: int, left: int) -> frozenset[tuple[int, ...]]:
+        key = (agenda, s, left)
+        r = self._plans.get(key)
+        if r is None:
+            out: set[tuple[int, ...]] = set()
+            opts = self.H.refine(agenda, s)
+            if not opts:
+                out.add((BLOCKED,))
+            for op, rest in opts:
+                if op == FINISH or left == 0:
+                    out.add((op if op == FINISH else HORIZON,))
+                    continue
+                s2 = self.g.human.ops[op].apply(s)
+                out.update((op, *tail) for tail in self._plans_from(rest, s2, left - 1))
+            r = self._plans[key] = frozenset(out)
+        return r
+
+    def _plans_differ(self, agenda: Agenda, t: int, worlds: Worlds) -> bool:
+        want = self.plans(agenda, t)
+        return any(self.plans(agenda, s) != want for s in states_of(worlds))
 
     def informing_set(self, es: EState) -> int:
         """A smallest set of atoms (as a mask) whose correction makes the human's next options
@@ -373,12 +454,17 @@ class Semantics:
         rv_t = frozenset(op for op, _ in self.R.refine(es.robot_agenda, t))
         h_diff = self.human_view(es.human_agenda, states) != hv_t
         r_diff = self.robot_view(es.worlds) != rv_t
-        if not (h_diff or r_diff):
+        plan = self.comm.relevance == Relevance.PLAN
+        p_diff = plan and self._plans_differ(es.human_agenda, t, es.worlds)
+        if not (h_diff or r_diff or p_diff):
             return 0
         cands = bits_of(div)
-        targets = [(h_diff, r_diff)] + ([(True, False)] if h_diff and r_diff else [])
-        for want_h, want_r in targets:
-            for size in range(1, min(len(cands), self.options.inform_max_atoms) + 1):
+        # fix every differing view; failing that, the human's (next options and plans) alone
+        targets = [(h_diff, r_diff, p_diff)]
+        if r_diff and (h_diff or p_diff):
+            targets.append((h_diff, False, p_diff))
+        for want_h, want_r, want_p in targets:
+            for size in range(1, min(len(cands), self.comm.inform_max_atoms) + 1):
                 best: tuple[int, int, list[str], int] | None = None
                 for combo in combinations(cands, size):
                     m = 0
@@ -388,6 +474,8 @@ class Semantics:
                     if want_h and self.human_view(es.human_agenda, states_of(w2)) != hv_t:
                         continue
                     if want_r and self.robot_view(w2) != rv_t:
+                        continue
+                    if want_p and self._plans_differ(es.human_agenda, t, w2):
                         continue
                     # prefer fewer remaining worlds, then telling what is true, then by name
                     rank = (len(w2), -bin(t & m).count("1"), [self.g.atoms[i] for i in combo], m)

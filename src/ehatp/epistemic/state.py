@@ -28,6 +28,8 @@ class EState(NamedTuple):
     worlds: Worlds
     k: int
     passive: int
+    forced: bool = False  # human node: the robot's last move was a forced wait (§4)
+    opening: bool = False  # robot node: the speech opening before the human's first move (§5)
 
 
 def normalize(worlds: Iterable[World]) -> Worlds:

@@ -7,7 +7,7 @@ Reading them from TOML is here too, so the problem loader stays one table per co
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from enum import StrEnum
 from fractions import Fraction
@@ -51,6 +51,14 @@ class ObjectiveKind(StrEnum):
     EXPECTED = "expected"
 
 
+# the keys of each options table, for the loader's checks
+OPTION_KEYS: dict[str, frozenset[str]] = {
+    "options": frozenset({"human_passes_when_blocked", "inform_max_atoms"}),
+    "human": frozenset({"passes", "passes_when_blocked", "anticipates"}),
+    "communication": frozenset({"inform", "speech", "relevance", "ask", "inform_max_atoms",
+                                "plan_horizon"}),
+    "objective": frozenset({"kind", "weights", "ties"}),
+}
 TIE_KEYS = ("communications", "passes", "length", "worst-case", "expected")
 DEFAULT_TIES = ("communications", "passes", "length")
 
@@ -101,7 +109,7 @@ class _Reader(Protocol):
     def err(self, place: str, problem: str, fix: str = "",
             needle: str | None = None) -> InputError: ...
 
-    def table(self, data: Mapping[str, Any], key: str, allowed: set[str],
+    def table(self, data: Mapping[str, Any], key: str, allowed: Iterable[str] | None,
               required: bool = False) -> dict[str, Any]: ...
 
 
@@ -133,11 +141,10 @@ def read_options(r: _Reader, data: Mapping[str, Any]
     """The ``[human]``, ``[communication]`` and ``[objective]`` tables (and the deprecated
     ``[options]`` spellings, with a one-line note each)."""
     notes: list[str] = []
-    old = r.table(data, "options", {"human_passes_when_blocked", "inform_max_atoms"})
-    h = r.table(data, "human", {"passes", "passes_when_blocked", "anticipates"})
-    c = r.table(data, "communication", {"inform", "speech", "relevance", "ask",
-                                        "inform_max_atoms", "plan_horizon"})
-    o = r.table(data, "objective", {"kind", "weights", "ties"})
+    old = r.table(data, "options", OPTION_KEYS["options"])
+    h = r.table(data, "human", OPTION_KEYS["human"])
+    c = r.table(data, "communication", OPTION_KEYS["communication"])
+    o = r.table(data, "objective", OPTION_KEYS["objective"])
     for key, new_table, new_key, target in (
             ("human_passes_when_blocked", "human", "passes_when_blocked", h),
             ("inform_max_atoms", "communication", "inform_max_atoms", c)):
@@ -181,5 +188,5 @@ def read_options(r: _Reader, data: Mapping[str, Any]
     return human, comm, objective, tuple(notes)
 
 
-__all__ = ["DEFAULT_TIES", "TIE_KEYS", "Communication", "HumanModel", "InformWhere",
+__all__ = ["DEFAULT_TIES", "OPTION_KEYS", "TIE_KEYS", "Communication", "HumanModel", "InformWhere",
            "Objective", "ObjectiveKind", "Passes", "Relevance", "Speech", "read_options"]

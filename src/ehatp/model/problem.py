@@ -26,6 +26,7 @@ from typing import Any
 
 from ..errors import InputError
 from .domain import AGENT_TYPE, Domain, DomainError, is_domain_factory
+from .options import OPTION_KEYS, Communication, HumanModel, Objective, read_options
 
 Cost = int | Fraction
 GroundAtom = tuple[str, tuple[str, ...]]
@@ -57,16 +58,6 @@ class Limits:
 
 
 @dataclass(frozen=True)
-class Options:
-    # Whether the human, blocked by uncertainty, may silently pass after a robot wait (the
-    # paper's trace b). See docs/semantics.md: with it, waiting for a question can never beat
-    # a proactive inform in the worst case.
-    human_passes_when_blocked: bool = True
-    # Largest informing set the planner tries (subsets by increasing size).
-    inform_max_atoms: int = 3
-
-
-@dataclass(frozen=True)
 class BeliefWorld:
     """One world the human entertains, as differences from the truth."""
 
@@ -88,12 +79,16 @@ class Problem:
     K: int = 2
     costs: Costs = field(default_factory=Costs)
     limits: Limits = field(default_factory=Limits)
-    options: Options = field(default_factory=Options)
+    human: HumanModel = field(default_factory=HumanModel)
+    communication: Communication = field(default_factory=Communication)
+    objective: Objective = field(default_factory=Objective)
     goal: tuple[tuple[bool, GroundAtom], ...] = ()
     # a fixed opening line of play (move labels); the policy starts where it ends
     after: tuple[str, ...] = ()
     description: str = ""
     source: str = "<python>"
+    # one-line notes for the user, e.g. a deprecated spelling in the file
+    notes: tuple[str, ...] = ()
 
     def all_objects(self) -> dict[str, list[str]]:
         """Objects by type, domain constants included, each list sorted by name."""
@@ -144,10 +139,10 @@ _TABLE_KEYS: dict[str, frozenset[str]] = {
     "agenda": frozenset({"robot", "human"}),
     "costs": frozenset({"inform", "ask", "wait", "pass", "actions"}),
     "limits": frozenset({"timeout", "max_states", "max_depth"}),
-    "options": frozenset({"human_passes_when_blocked", "inform_max_atoms"}),
+    **OPTION_KEYS,
 }
 _TOP_TABLES = {"problem", "domain", "objects", "init", "beliefs", "agenda", "costs", "limits",
-               "options"}
+               "options", "human", "communication", "objective"}
 _TOP_VALUES = {"goal"}  # top-level keys that are not tables
 _TOP_KEYS = _TOP_TABLES | _TOP_VALUES
 
@@ -429,16 +424,12 @@ def load(path: str | Path) -> Problem:
         max_states=_int(r, "[limits] max_states", l_t.get("max_states", Limits.max_states)),
         max_depth=_int(r, "[limits] max_depth", l_t.get("max_depth", Limits.max_depth)),
     )
-    o_t = r.table(data, "options", _TABLE_KEYS["options"])
-    hp = o_t.get("human_passes_when_blocked", True)
-    if not isinstance(hp, bool):
-        raise r.err("[options] human_passes_when_blocked", "expected true or false",
-                    "write true or false")
-    options = Options(hp, _int(r, "[options] inform_max_atoms", o_t.get("inform_max_atoms", 3)))
+    human, communication, objective, notes = read_options(r, data)
     after = tuple(r.strings("[problem] after", prob.get("after", [])))
     return Problem(name=name, domain=domain, objects=objects, init=init,
                    robot_agenda=agendas["robot"], human_agenda=agendas["human"], beliefs=beliefs,
-                   starts=starts, K=K, costs=costs, limits=limits, options=options,
+                   starts=starts, K=K, costs=costs, limits=limits, human=human,
+                   communication=communication, objective=objective, notes=notes,
                    goal=tuple(goal), after=after, description=description,
                    source=str(path))
 

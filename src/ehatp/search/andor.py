@@ -26,7 +26,7 @@ from ..model.problem import Cost
 from .values import Values, compute_values
 
 OPEN, EXPANDED, GOAL, DEAD = 0, 1, 2, 3
-KIND_ORDER = {"action": 0, "inform": 1, "ask": 2, "wait": 3, "pass": 4}
+KIND_ORDER = {"silence": -1, "action": 0, "inform": 1, "ask": 2, "wait": 3, "pass": 4}
 
 
 @dataclass(slots=True)
