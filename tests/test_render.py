@@ -114,7 +114,7 @@ def test_share_identical_subtrees(policy_files: dict[str, Path]) -> None:
 
 
 def test_over_budget_collapses_and_says_so(policy_files: dict[str, Path]) -> None:
-    result = run(policy_files["p4"], "--max-nodes", "100")
+    result = run(policy_files["p4"], "--max-nodes", "40")
     assert result.exit_code == 0, result.output
     assert "collapsed: identical subtrees" in result.stderr
     assert "collapsed: identical subtrees" in result.stdout

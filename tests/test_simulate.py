@@ -194,11 +194,11 @@ def test_uncovered_human_action_raises_with_the_expected_actions() -> None:
 
 def test_human_leaving_the_opening_or_the_model() -> None:
     ex = Executor(ehatp.load(QUAL), policy_of(QUAL))
-    with pytest.raises(UncoveredHumanAction, match=r"H did pick\(r\), which the problem's "
+    with pytest.raises(UncoveredHumanAction, match=r"H did pass, which the problem's "
                        r"fixed opening does not cover; the policy expects move\(mt, ot\)"):
-        ex.observe_human_action("pick(r)")
+        ex.observe_human_action("pass")
     with pytest.raises(UncoveredHumanAction, match=r"dance, which is not a move of H here "
-                       r"\(the model allows pick\(r\), move\(mt, ot\), pass\)"):
+                       r"\(the model allows move\(mt, ot\), pass\)"):
         ex.observe_human_action("dance")
     with pytest.raises(ExecutionError, match="it is not R's turn: H is to move"):
         ex.robot_action_done()
@@ -257,20 +257,19 @@ def test_random_human_is_deterministic() -> None:
 def test_first_human_is_the_default() -> None:
     code, out = invoke(str(P2))
     assert code == 0 and "human moves: first option" in out
-    assert steps(out)[0][:2] == ("H", "pick(r)")  # the semantics' first option at the root
+    assert steps(out)[0][:2] == ("H", "move(mt, ot)")  # the semantics' first option at the root
 
 
 def test_ask_reads_numbers_and_labels_from_piped_stdin() -> None:
     # a number, a label, two bad answers, a label with the agent's name, then numbers
     code, out = invoke(str(P2), "--human", "ask",
-                       input="1\nplace(r, box2)\nnonsense\n7\nH move(mt, ot)\n1\n1\n1\n")
+                       input="2\nmove(mt, ot)\nnonsense\n7\nH pick(w)\n1\n1\n")
     assert code == 0, out
-    assert "  H to move; options:\n    1) pick(r)\n    2) move(mt, ot)\n    3) pass\n" in out
+    assert "  H to move; options:\n    1) move(mt, ot)\n    2) pass\n" in out
     assert "not an option: 'nonsense'; type 1 or a label" in out
     assert "not an option: '7'" in out
     humans = [lab for a, lab, _, _ in steps(out) if a == "H"]
-    assert humans == ["pick(r)", "place(r, box2)", "move(mt, ot)", "pick(w)", "move(ot, mt)",
-                      "place(w, box1)"]
+    assert humans == ["pass", "move(mt, ot)", "pick(w)", "move(ot, mt)", "place(w, box1)"]
     assert "outcome: goal reached" in out
 
 
@@ -301,7 +300,7 @@ def test_bad_script_lines(tmp_path: Path) -> None:
     code, out = invoke(str(P2), "--script", str(script))
     assert code == 2
     assert f"{script}:3: 'dance' is not a move of H here; give one of: " in out
-    script.write_text("pick(r)\n", encoding="utf-8")
+    script.write_text("move(mt, ot)\n", encoding="utf-8")
     code, out = invoke(str(P2), "--script", str(script))
     assert code == 2 and f"{script}:end: the script ended but H must move" in out
     script.write_text("R inform(empty(box2))\nplace(w, box2)\npass\n", encoding="utf-8")

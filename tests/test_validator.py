@@ -117,9 +117,9 @@ def test_human_branch_removed() -> None:
     problem, policy = planned("cubes/p1.toml")
 
     def edit(d: dict[str, Any]) -> None:
-        d["nodes"][0]["children"].remove(node(d, agent="H", action="pick(r)")["id"])
+        d["nodes"][0]["children"].remove(node(d, agent="H", action="move(mt, ot)")["id"])
 
-    caught(problem, mutated(policy, edit), "branch []", "missing human branch H pick(r)")
+    caught(problem, mutated(policy, edit), "branch []", "missing human branch H move(mt, ot)")
 
 
 def test_extra_human_branch() -> None:
@@ -199,10 +199,10 @@ def test_wrong_value_on_a_node() -> None:
     problem, policy = planned("cubes/p1.toml")
 
     def edit(d: dict[str, Any]) -> None:
-        node(d, agent="H", action="pick(r)")["value"] = 3
+        node(d, agent="H", action="pass")["value"] = 3
 
-    r = caught(problem, mutated(policy, edit), "branch [H pick(r)]",
-               "value is 3, but its worst-case cost-to-go is 10")
+    r = caught(problem, mutated(policy, edit), "branch [H pass]",
+               "value is 3, but its worst-case cost-to-go is 8")
     assert len(r.violations) == 1
 
 
@@ -277,7 +277,7 @@ def test_inform_of_more_atoms_than_needed() -> None:
 
 
 def test_inform_while_apart() -> None:
-    problem, policy = planned("cubes/p1.toml")
+    problem, policy = planned("cubes/p2.toml")
 
     def edit(d: dict[str, Any]) -> None:
         n = node(d, agent="R", action="wait", copresent=False)
@@ -369,8 +369,8 @@ def test_other_branches_are_still_checked() -> None:
     problem, policy = planned("cubes/p1.toml")
 
     def edit(d: dict[str, Any]) -> None:
-        node(d, agent="H", action="pick(w)")["cost"] = 7
-        node(d, agent="H", action="place(r, box1)")["worlds"] = 5
+        node(d, agent="H", action="pick(w)")["cost"] = 7  # in the first branch
+        node(d, agent="H", action="pass")["worlds"] = 5  # the root's other branch
 
     r = caught(problem, mutated(policy, edit), "cost is 7")
     assert len(r.violations) == 2

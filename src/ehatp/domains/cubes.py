@@ -1,12 +1,20 @@
 """Cube organization (the paper's case study, Table 1 P1-P6).
 
 Two tables: ``mt`` (robot and boxes) and ``ot``. Only the human moves. The cubes of each table
-must end in one box, different tables in different boxes. Box contents are visible only for
-transparent boxes, from ``mt``; what lies on a table is visible from that table; what an agent
-holds is visible when co-present (the human always knows what it holds itself).
+must end in one box, different tables in different boxes.
 
-Option ``turn_before_move`` (the K=4 instances): going to a table takes ``turn`` then ``move``,
-and turning away already breaks co-presence; otherwise one ``move`` does both (K=2 instances).
+Reach: the robot picks cubes on ``mt``; the human handles only the cubes it must fetch, those
+whose origin is not ``mt`` (the robot's cubes are the robot's). Sight: what lies on a table, and
+what a transparent box on ``mt`` holds, is visible only while the human is at *and facing* that
+table; what an agent holds is visible when co-present (same table, both facing it), and the
+human always knows what it holds itself.
+
+Options:
+
+- ``turn_before_move`` (the K=4 instances): going to a table takes ``turn`` then ``move``, and
+  turning away already breaks co-presence and sight; otherwise one ``move`` does both (K=2).
+- ``human_reach``: ``"fetched"`` (default, the paper's rule above) or ``"any"`` (the human may
+  also pick and box the robot's cubes on ``mt``, this project's reach before issue 7).
 
 Our modelling choices: the placement rule ``can_put`` and the goal are derived predicates
 (printed by name in asks); ``pick`` names only the cube (the table is where the cube lies).
@@ -14,15 +22,25 @@ Our modelling choices: the placement rule ``can_put`` and the goal are derived p
 
 from __future__ import annotations
 
+from typing import Literal
+
 from ..model.domain import Domain, TaskRef, for_each, observable
-from ..model.formula import Var, eq, exists, forall
+from ..model.formula import TRUE, Formula, Var, eq, exists, forall
 
 R, H = "R", "H"
 MT, OT = "mt", "ot"
+HUMAN_REACH = ("fetched", "any")
 
 
-def make_domain(turn_before_move: bool = False) -> Domain:
-    d = Domain("cubes-turn" if turn_before_move else "cubes", robot=R, human=H, doc=__doc__ or "")
+def make_domain(turn_before_move: bool = False,
+                human_reach: Literal["fetched", "any"] = "fetched") -> Domain:
+    """The cube domain; see the module docstring for the two options."""
+    if human_reach not in HUMAN_REACH:
+        raise ValueError(f"human_reach must be one of {', '.join(map(repr, HUMAN_REACH))}, "
+                         f"got {human_reach!r}")
+    # the name tells the variant, so that a policy file says which model it was planned for
+    suffix = ("-turn" if turn_before_move else "") + ("-reach-any" if human_reach == "any" else "")
+    d = Domain("cubes" + suffix, robot=R, human=H, doc=__doc__ or "")
     Table, Box, Cube = d.type("table"), d.type("box"), d.type("cube")
     d.constant(MT, Table)
     d.constant(OT, Table)
@@ -39,8 +57,10 @@ def make_domain(turn_before_move: bool = False) -> Domain:
     facing = d.predicate("facing", a, t)
     copresent = exists(t, at(R, t) & at(H, t) & facing(R, t) & facing(H, t))
     d.copresence = copresent
-    on = d.predicate("on", c, t, observability=observable(at(H, t)))
-    box_visible = observable(at(H, MT) & transparent(b))
+    # sight: the human sees a table only while at it and facing it (turning away is enough to
+    # miss the robot's work in the K=4 instances; in K=2 ones moving sets facing too)
+    on = d.predicate("on", c, t, observability=observable(at(H, t) & facing(H, t)))
+    box_visible = observable(at(H, MT) & facing(H, MT) & transparent(b))
     inside = d.predicate("in", c, b, observability=box_visible)
     empty = d.predicate("empty", b, observability=box_visible)
     own_or_seen = observable(eq(a, H) | copresent)
@@ -68,9 +88,11 @@ def make_domain(turn_before_move: bool = False) -> Domain:
     rm.method(r_away, "box", params=[b], pre=holding(R, c) & can_put(c, b),
               subtasks=[r_place(c, b)])
 
-    # -- human: fetches cubes from other tables too --
+    # -- human: fetches the cubes of other tables (all cubes with human_reach="any") --
+    # reach is static data (a cube's origin), so the human never acts on the robot's cubes
+    reach: Formula = ~origin(c, MT) if human_reach == "fetched" else TRUE
     hm = d.human
-    h_pick = hm.action("pick", c, pre=exists(t, at(H, t) & on(c, t)) & handempty(H),
+    h_pick = hm.action("pick", c, pre=reach & exists(t, at(H, t) & on(c, t)) & handempty(H),
                        effects=[holding(H, c), ~handempty(H), for_each(t, ~on(c, t))])
     h_place = hm.action("place", c, b, pre=holding(H, c) & at(H, MT) & can_put(c, b),
                         effects=[inside(c, b), ~empty(b), ~holding(H, c), handempty(H)])
@@ -89,9 +111,9 @@ def make_domain(turn_before_move: bool = False) -> Domain:
     h_org = hm.task("organize", done=goal())
     h_away = hm.task("put_away", c)
     fetch = hm.task("fetch", c, t)
-    hm.method(h_org, "near", params=[c, t], pre=at(H, t) & on(c, t) & handempty(H),
+    hm.method(h_org, "near", params=[c, t], pre=reach & at(H, t) & on(c, t) & handempty(H),
               subtasks=[h_pick(c), h_away(c), h_org()])
-    hm.method(h_org, "far", params=[c, t], pre=on(c, t) & ~at(H, t) & handempty(H),
+    hm.method(h_org, "far", params=[c, t], pre=reach & on(c, t) & ~at(H, t) & handempty(H),
               subtasks=[fetch(c, t), h_away(c), h_org()])
     hm.method(fetch, "go", params=[t0], pre=at(H, t0) & ~eq(t0, t),
               subtasks=[*go(t0, t), h_pick(c)])
