@@ -18,17 +18,43 @@ analyse it: which atoms a precondition reads, what the human can see, how to pri
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal, TypeVar
 
-from .formula import TRUE, Atom, Formula, Not, Term, Var, free_vars
+from ..errors import EhatpError
+from .formula import TRUE, And, Atom, Eq, Exists, Forall, Formula, Not, Or, Term, Var, free_vars
 
 AGENT_TYPE = "agent"
 
 
-class DomainError(Exception):
+class DomainError(EhatpError):
     """A mistake in a domain definition (raised while the domain module is built)."""
+
+
+# --- domain factories ------------------------------------------------------------------------
+
+_FACTORY_MARK = "__ehatp_domain_factory__"
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+def domain_factory(fn: F) -> F:
+    """Mark ``fn`` as a function that builds a :class:`Domain` from keyword options.
+
+    A problem file's ``[domain] name = "module:attribute"`` may only name a ``Domain`` or a
+    function marked so: problem files are data, and this keeps them from calling anything else.
+    Its other ``[domain]`` keys become ``fn``'s keyword arguments::
+
+        @domain_factory
+        def make_domain(variant: int = 1) -> Domain: ...
+    """
+    setattr(fn, _FACTORY_MARK, True)
+    return fn
+
+
+def is_domain_factory(obj: object) -> bool:
+    """Whether ``obj`` was marked with :func:`domain_factory`."""
+    return callable(obj) and getattr(obj, _FACTORY_MARK, False) is True
 
 
 # --- observability ---------------------------------------------------------------------------
@@ -203,6 +229,12 @@ class AgentModel:
             raise DomainError(f"{self.agent}.{name}: cost must be positive, got {cost}")
         op = Operator(name, tuple(params), pre, tuple(effects), cost, done)
         _check_scope(f"action {name}", set(params), [pre, *([done] if done else [])])
+        # an effect with a variable the action does not bind could only fail when grounded
+        loose = _effect_vars(f"action {name}", op.effects) - set(params)
+        if loose:
+            raise DomainError(f"action {name}: an effect uses unbound "
+                              f"{', '.join(sorted(v.name for v in loose))}; add it to the "
+                              "action's parameters or bind it with for_each")
         self.operators[name] = op
         return op
 
@@ -251,6 +283,24 @@ def _check_scope(where: str, scope: set[Var], formulas: Iterable[Formula]) -> No
         if loose:
             raise DomainError(f"{where}: formula {f} uses unbound "
                               f"{', '.join(sorted(v.name for v in loose))}")
+
+
+def _effect_vars(where: str, effects: Iterable[object]) -> set[Var]:
+    """The variables ``effects`` leave free; anything that is not an effect is a DomainError."""
+    out: set[Var] = set()
+    for e in effects:
+        if isinstance(e, Atom):
+            out |= free_vars(e)
+        elif isinstance(e, Not) and isinstance(e.arg, Atom):
+            out |= free_vars(e.arg)
+        elif isinstance(e, When):
+            out |= free_vars(e.cond) | _effect_vars(where, e.effects)
+        elif isinstance(e, ForEach):
+            out |= _effect_vars(where, e.effects) - set(e.vars)
+        else:
+            raise DomainError(f"{where}: {e!r} is not an effect (write an atom, ~atom, "
+                              "when(...) or for_each(...))")
+    return out
 
 
 # --- the domain ------------------------------------------------------------------------------
@@ -323,6 +373,64 @@ class Domain:
     def _fresh_pred(self, name: str) -> None:
         if name in self.predicates or name in self.derived_predicates:
             raise DomainError(f"predicate {name!r} is declared twice")
+
+    def check(self) -> None:
+        """What declaring cannot check, because it may be set later: the goal and co-presence
+        are closed formulas, and every variable has a declared type. Raise DomainError."""
+        for what, f in (("copresence", self.copresence), ("goal", self.goal)):
+            if f is None:
+                continue
+            if not isinstance(f, Formula):
+                raise DomainError(f"domain {self.name}: {what} is {f!r}, not a formula")
+            _check_scope(f"domain {self.name}: {what}", set(), [f])
+        for where, v in self._variables():
+            if v.type not in self.types:
+                raise DomainError(f"{where}: variable {v.name} has the undeclared type "
+                                  f"{v.type!r}; declare it with d.type({v.type!r})")
+
+    def _variables(self) -> Iterable[tuple[str, Var]]:
+        def of(where: str, f: object) -> Iterable[tuple[str, Var]]:
+            if isinstance(f, Atom):
+                yield from ((where, a) for a in f.args if isinstance(a, Var))
+            elif isinstance(f, Eq):
+                yield from ((where, a) for a in (f.left, f.right) if isinstance(a, Var))
+            elif isinstance(f, Not):
+                yield from of(where, f.arg)
+            elif isinstance(f, And | Or):
+                for a in f.args:
+                    yield from of(where, a)
+            elif isinstance(f, Exists | Forall):
+                yield from ((where, v) for v in f.vars)
+                yield from of(where, f.body)
+            elif isinstance(f, When):
+                yield from of(where, f.cond)
+                for e in f.effects:
+                    yield from of(where, e)
+            elif isinstance(f, ForEach):
+                yield from ((where, v) for v in f.vars)
+                for e in f.effects:
+                    yield from of(where, e)
+
+        yield from of("copresence", self.copresence)
+        yield from of("goal", self.goal)
+        for d in self.derived_predicates.values():
+            yield from ((f"derived predicate {d.name}", v) for v in d.params)
+            yield from of(f"derived predicate {d.name}", d.body)
+        for p in self.predicates.values():
+            yield from of(f"visibility of {p.name}", p.observability.when)
+        for m in (self.robot, self.human, self.robot_seen_by_human):
+            for op in m.operators.values():
+                where = f"{m.agent}: action {op.name}"
+                yield from ((where, v) for v in op.params)
+                for f in (op.pre, op.done, *op.effects):
+                    yield from of(where, f)
+            for t in m.tasks.values():
+                yield from ((f"{m.agent}: task {t.name}", v) for v in t.params)
+                yield from of(f"{m.agent}: task {t.name}", t.done)
+            for me in m.methods:
+                where = f"{m.agent}: method {me.task.name}.{me.name}"
+                yield from ((where, v) for v in me.params)
+                yield from of(where, me.pre)
 
     def models(self) -> dict[str, AgentModel]:
         return {"robot": self.robot, "human": self.human,

@@ -134,6 +134,9 @@ def _bits(m: int) -> Iterable[int]:
 
 
 def ground_problem(problem: Problem) -> Grounded:
+    """Ground ``problem`` after checking it (a Problem built in Python is checked as a problem
+    file is: unknown predicates, objects or tasks raise InputError, not a KeyError later)."""
+    problem.check()
     return _Grounder(problem).run()
 
 
