@@ -1,4 +1,4 @@
-"""Reproduce Table 1 of the paper: our figures beside the published ones, with speed-ups.
+"""Reproduce Table 1 of the paper: our figures beside the published and stored ones.
 
     .venv/bin/python benchmarks/table1.py [--repeat N] [--json FILE] [--only P1 ...]
 
