@@ -231,8 +231,8 @@ class Spec:
 
 # --- drawing ----------------------------------------------------------------------------------
 
-OBS_KINDS = (("always", 0.15), ("together", 0.3), ("home", 0.1), ("away", 0.05),
-             ("inferable", 0.2), ("hidden", 0.2))
+OBS_KINDS = (("always", 0.1), ("together", 0.25), ("home", 0.1), ("away", 0.05),
+             ("inferable", 0.2), ("hidden", 0.3))
 MARK_KINDS = (("glass", 0.4), ("together", 0.2), ("inferable", 0.2), ("hidden", 0.2))
 MUTATIONS = (("drop_op", 2), ("extra_op", 2), ("drop_method", 2), ("extra_method", 2),
              ("change_pre", 3), ("change_eff", 1), ("drop_task", 1), ("toggle_done", 1),
@@ -247,7 +247,7 @@ class _Drawer:
     simulated: each agenda decomposed with a random method per task, the two interleaved at
     random. Preconditions, task done-conditions and goal literals are fitted to it, preferring
     literals the run changed, so that most problems have a solution in which one agent needs
-    the other's work. One fitted precondition in five gets an extra random literal (the run
+    the other's work. One fitted precondition in 12 gets an extra random literal (the run
     may then block: unsolvable problems are drawn too). A structure whose intended run breaks
     a fixed precondition (``put``, ``take``, ``leave``, ``back``) is redrawn, up to 3 times.
     """
@@ -266,10 +266,11 @@ class _Drawer:
         n = min(self.r.randint(lo, hi), len(atoms))
         return tuple((a, self.chance(0.5)) for a in sorted(self.r.sample(list(atoms), n)))
 
-    def among(self, cands: list[Lit], changed: Callable[[Lit], bool], n: int) -> tuple[Lit, ...]:
-        """``n`` of ``cands`` (fewer if short), three times likelier when ``changed``."""
+    def among(self, cands: list[Lit], favoured: Callable[[Lit], bool], n: int
+              ) -> tuple[Lit, ...]:
+        """``n`` of ``cands`` (fewer if short), three times likelier when ``favoured``."""
         cands = list(cands)
-        weights = [3 if changed(c) else 1 for c in cands]
+        weights = [3 if favoured(c) else 1 for c in cands]
         out: list[Lit] = []
         for _ in range(min(n, len(cands))):
             k = self.r.choices(range(len(cands)), weights)[0]
@@ -358,14 +359,17 @@ class _Drawer:
         h_prims = [o.name for o in h_ops if o.name.startswith("h")] + (
             ["take(x)", "take(y)"] if any(o.name == "take" for o in h_ops) else [])
         home = self.chance(0.9)  # else the human starts away, and comes back first thing
-        h_methods = []
-        for k in range(r.choices([1, 2], [1, 1])[0]):
+        h_methods: list[MethodSpec] = []
+        for k in range(r.choices([1, 2, 3], [4, 4, 1])[0]):
             if self.chance(0.55):  # a trip: leave (when home), act away, come back, act
                 body: tuple[str, ...] = (*(("leave",) if home else ()),
                                          *self.body(h_prims, 0, 2), "back",
                                          *self.body(h_prims, 0, 2))
             else:
                 body = (*(() if home else ("back",)), *self.body(h_prims, 1, 3))
+            first = h_methods[0].subtasks[0] if h_methods else ""
+            if first in h_prims and body[0] in h_prims and self.chance(0.4):
+                body = (first, *body[1:])  # the same first step, then another way
             h_methods.append(MethodSpec("chore", f"c{k}", self.fit_later(0.3) or (), body))
         human = ModelSpec(tuple(h_ops), (TaskSpec("chore", False, self.fit_later(0.2)),),
                           tuple(h_methods))
@@ -373,13 +377,12 @@ class _Drawer:
 
         init = (("home",) if home else ()) + tuple(a for a in fluents if self.chance(0.35))
         goal = self.fit_later(0.3) or ()
-        fitted = self.fit(robot, human, init, robot_agenda, human_agenda, generic, fluents,
-                          goal)
-        if fitted is None and not accept:
+        feasible, robot, human, goal, final = self.fit(robot, human, init, robot_agenda,
+                                                      human_agenda, generic, fluents, goal)
+        if not feasible and not accept:
             return None
-        robot, human, goal, final = fitted or (robot, human, (), frozenset(init))
         robot_seen, mutations = self.robot_seen(robot, generic, fluents, final, init)
-        worlds = self.worlds(fluents, robot_agenda, agenda_pool)
+        worlds = self.worlds(fluents, robot_agenda, agenda_pool, human)
         ops_named = [o.name for o in r_ops + h_ops if o.name not in ("leave", "back")]
         action_costs = ((r.choice(ops_named), r.randint(1, 3)),) if self.chance(0.15) else ()
         return Spec(self.seed, tuple(atoms), items, glass, door, robot, human, robot_seen,
@@ -391,26 +394,26 @@ class _Drawer:
     def fit(self, robot: ModelSpec, human: ModelSpec, init: Sequence[str],
             robot_agenda: Sequence[str], human_agenda: Sequence[str], generic: Sequence[str],
             fluents: Sequence[str], goal: tuple[Lit, ...]
-            ) -> tuple[ModelSpec, ModelSpec, tuple[Lit, ...], frozenset[str]] | None:
-        """The models with fitted conditions, the goal and the run's final state; None when
-        the run breaks a fixed precondition."""
+            ) -> tuple[bool, ModelSpec, ModelSpec, tuple[Lit, ...], frozenset[str]]:
+        """Whether the run keeps the fixed preconditions, the models with fitted conditions,
+        the goal and the run's final state."""
         models = (robot, human)
         runs = [self.expand(robot, robot_agenda), self.expand(human, human_agenda)]
         state = frozenset(init)
+        feasible = True
         snaps: dict[tuple[int, str], list[frozenset[str]]] = {}
         while runs[0] or runs[1]:
             who = self.r.choice([k for k in (0, 1) if runs[k]])
-            kind, name, arg = runs[who].pop(0)
-            snaps.setdefault((who, name), []).append(state)
-            if kind == "op":
-                op = models[who].op(name)
-                assert op is not None
-                if op.done is not None and _holds(op.done, arg, state):
-                    continue
-                if (op.param or op.name in ("leave", "back")) and not _holds(op.pre, arg,
-                                                                                 state):
-                    return None
-                state = _apply(op, arg, state)
+            kind = "method"
+            while kind == "method" and runs[who]:  # methods are chosen with their first action
+                kind, name, arg = runs[who].pop(0)
+                snaps.setdefault((who, name), []).append(state)
+            op = models[who].op(name)
+            if op is None or (op.done is not None and _holds(op.done, arg, state)):
+                continue
+            if (op.param or op.name in ("leave", "back")) and not _holds(op.pre, arg, state):
+                feasible = False
+            state = _apply(op, arg, state)
 
         def pre(who: int, name: str, most: int) -> tuple[Lit, ...]:
             seen = snaps.get((who, name))
@@ -421,7 +424,7 @@ class _Drawer:
                      if all((a in s) == (a in first) for s in seen)]
             out = self.among(cands, lambda c: (c[0] in init) != c[1],
                              self.r.randint(0 if most > 1 else 1, most))
-            if self.chance(0.2):
+            if self.chance(0.08):
                 extra = self.lits(generic, 1, 1)[0]
                 if extra[0] not in {a for a, _ in out}:
                     out = tuple(sorted((*out, extra)))
@@ -444,7 +447,7 @@ class _Drawer:
         if goal:
             goal = self.among([(a, a in state) for a in generic],
                               lambda c: (c[0] in init) != c[1], self.r.randint(1, 2))
-        return fitted[0], fitted[1], goal, state
+        return feasible, fitted[0], fitted[1], goal, state
 
     def expand(self, m: ModelSpec, agenda: Sequence[str]) -> list[tuple[str, str, str]]:
         """One decomposition of ``agenda``: ("op" | "method", name, item) in order."""
@@ -471,10 +474,14 @@ class _Drawer:
 
     # -- the human's beliefs -------------------------------------------------------------------
 
-    def worlds(self, fluents: Sequence[str], agenda: tuple[str, ...],
-               pool: Sequence[str]) -> tuple[WorldSpec, ...]:
+    def worlds(self, fluents: Sequence[str], agenda: tuple[str, ...], pool: Sequence[str],
+               human: ModelSpec) -> tuple[WorldSpec, ...]:
+        """One true world, one with false beliefs, or several (uncertainty). Flips favour the
+        atoms the human's own preconditions read (three times likelier)."""
         r = self.r
-        kind = self.pick((("true", 0.35), ("false", 0.3), ("uncertain", 0.35)))
+        read = {_head(a) if "?i" in a else a for o in human.ops for a, _ in o.pre}
+        read |= {f"mark({i})" for i in ITEMS if "mark" in read}
+        kind = self.pick((("true", 0.25), ("false", 0.35), ("uncertain", 0.4)))
         if kind == "true":
             count, lo, hi = 1, 0, 0
         elif kind == "false":
@@ -483,7 +490,8 @@ class _Drawer:
             count, lo, hi = r.randint(2, 3), 0, 2
         out = []
         for _ in range(count):
-            flips = tuple(sorted(r.sample(list(fluents), min(r.randint(lo, hi), len(fluents)))))
+            cands = [(a, a in read) for a in fluents]
+            flips = tuple(a for a, _ in self.among(cands, lambda c: c[1], r.randint(lo, hi)))
             ag: tuple[str, ...] | None = None
             if self.chance(0.25):
                 ag = r.choice([(), agenda[1:], self.body(pool, 1, 2)])
