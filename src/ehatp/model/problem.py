@@ -245,12 +245,12 @@ class _Reader:
             return (f"{key} is a top-level key, but it comes after the [{table}] header, so "
                     f"TOML reads it as part of [{table}]",
                     f"move it above the first table ([{first}])")
-        if key in _TOP_TABLES and key != table:
-            return f"{key} is a table of its own", f"write it under its own [{key}] header"
         homes = sorted(t for t, keys in _TABLE_KEYS.items() if key in keys and t != table)
         if homes:
             return (f"{key} belongs in {' or '.join(f'[{t}]' for t in homes)}",
                     "move it under that header")
+        if key in _TOP_TABLES and key != table:
+            return f"{key} is a table of its own", f"write it under its own [{key}] header"
         return None
 
     def unknown_key(self, table: str, key: str, allowed: Iterable[str], place: str = "",
@@ -293,7 +293,7 @@ class _Reader:
         return list(value)
 
     def number(self, place: str, value: Any, *, positive: bool = True) -> Cost:
-        if isinstance(value, bool) or not isinstance(value, int | float):
+        if isinstance(value, bool) or not isinstance(value, int | float | Fraction):
             raise self.err(place, f"expected a number, got {_show(value)}",
                            "write e.g. 1 or 2.5")
         if isinstance(value, float) and not math.isfinite(value):
@@ -302,7 +302,7 @@ class _Reader:
         if positive and value <= 0:
             raise self.err(place, f"must be positive, got {value}",
                            "give a number greater than 0 (costs must be positive)")
-        return value if isinstance(value, int) else Fraction(str(value))
+        return value if isinstance(value, int | Fraction) else Fraction(str(value))
 
 
 def _show(value: Any) -> str:
@@ -367,7 +367,12 @@ def load(path: str | Path) -> Problem:
     kinds = [x for x in domain.types if x != AGENT_TYPE]
     for t, names in objs_t.items():
         if t not in kinds:
-            raise r.unknown_key("objects", t, kinds, what=f"type in domain {domain.name}:")
+            wrong = r.misplaced("objects", t)
+            if wrong is not None:
+                raise r.err(f"[objects] {t}", f"unknown type {t!r} in [objects]: {wrong[0]}",
+                            wrong[1])
+            raise r.err(f"[objects] {t}", f"unknown type {t!r} in domain {domain.name}",
+                        f"use one of: {', '.join(kinds)}")
         for o in r.strings(f"[objects] {t}", names):
             if not re.fullmatch(r"[A-Za-z_][\w\-]*", o):
                 raise r.err(f"[objects] {t}", f"bad object name {o!r}",

@@ -9,6 +9,7 @@ from ..model.grounding import ground_problem
 from ..model.problem import Problem
 from ..policy_format import Policy
 from .andor import Progress, search
+from .diagnose import diagnose
 from .policy import explain_failure, extract
 
 
@@ -47,7 +48,11 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
                      leaves=policy.leaves)
     reason = ""
     if out.status == "unsolvable":
-        reason = "no policy exists: " + explain_failure(out.graph, out.root)
+        # name the goal literals or agendas that fail everywhere; a line of play that dies
+        # is only the fallback (it is one of many, and may look arbitrary)
+        graph, root = out.graph, out.root
+        reason = "no policy exists: " + diagnose(grounded, graph,
+                                                 lambda: explain_failure(graph, root))
     elif out.status == "timeout":
         reason = f"time limit reached after {out.stats.time_s:.1f} s"
     elif out.status == "state-limit":
