@@ -15,7 +15,7 @@ action); the ingredient's place is three nullary atoms; ``cut`` has done-conditi
 
 from __future__ import annotations
 
-from ..model.domain import INFERABLE, Domain, TaskRef, observable
+from ..model.domain import INFERABLE, Domain, TaskRef, domain_factory, observable
 from ..model.formula import Var, eq, exists
 
 R, H = "R", "H"
@@ -23,6 +23,7 @@ KITCHEN, PANTRY = "kitchen", "pantry"
 VARIANTS = {1: "cooking", 2: "cooking-ready", 3: "cooking-turn"}
 
 
+@domain_factory
 def make_domain(variant: int = 1) -> Domain:
     if variant not in VARIANTS:
         raise ValueError(f"variant must be 1, 2 or 3, got {variant!r}")
