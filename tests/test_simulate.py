@@ -269,7 +269,7 @@ def test_ask_reads_numbers_and_labels_from_piped_stdin() -> None:
     assert "not an option: 'nonsense'; type 1 or a label" in out
     assert "not an option: '7'" in out
     humans = [lab for a, lab, _, _ in steps(out) if a == "H"]
-    assert humans == ["pass", "move(mt, ot)", "pick(w)", "move(ot, mt)", "place(w, box1)"]
+    assert humans == ["pass", "move(mt, ot)", "pick(w)", "move(ot, mt)", "place(w, box2)"]
     assert "outcome: goal reached" in out
 
 
