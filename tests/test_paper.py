@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
 
 import ehatp
+from ehatp import Passes
 from ehatp.model.grounding import ground_problem
 from ehatp.policy_format import Policy
 from ehatp.search.andor import search
@@ -99,25 +101,41 @@ def test_placing_y_in_front_of_the_human_leaves_a_single_world() -> None:
     assert box_view(sem, es) == [{"in(r, box1)", "empty(box2)"}]
 
 
-def test_deferral_beats_boxing_unseen_and_informing() -> None:
+def test_deferral_ties_with_boxing_unseen_and_wins_by_talking_less() -> None:
     """Our P2 robot holds r until the human is back instead of boxing it unseen (docs)."""
-    out = search(ground_problem(ehatp.load(CUBES / "p2.toml")))
+    p2 = ehatp.load(CUBES / "p2.toml")
+    out = search(ground_problem(p2))
     gr, values = out.graph, out.values
     assert values is not None
-    _, es = walk(ehatp.load(CUBES / "p2.toml"), *AWAY[:3])
+    _, es = walk(p2, *AWAY[:3])
     n = gr.index[es]
     costs = {e.move.label: e.move.cost + values.value[e.child] for e in gr.edges[n]}
-    # boxing unseen: back, inform, then the human may still dawdle (pass, wait, place): 6;
-    # holding r: back, wait, place w, place r (a pass after a wait is not covered): 5
-    assert costs["wait"] == 5 and costs["place(r, box1)"] == costs["place(r, box2)"] == 6
+    # boxing unseen: back, inform, the human may pass, wait (forced), place w: 6; holding r:
+    # back, the robot places r in front of the human (it may pass), wait (forced), place: 6.
+    # Equal cost: the silent policy wins only by the fewer-communications tie-break
+    assert costs["wait"] == costs["place(r, box1)"] == costs["place(r, box2)"] == 6
     assert gr.edges[n][values.choice[n]].move.label == "wait"
     # and in the policy, the human sees the robot holding r when back: one world, no talk
-    r = ehatp.solve(ehatp.load(CUBES / "p2.toml"))
+    r = ehatp.solve(p2)
     assert r.policy is not None and r.policy.communications == 0
     branch = next(b for b in r.policy.branches() if [x.action for x in b[1:4]] ==
                   ["move(mt, ot)", "pick(r)", "pick(w)"])
     back = next(x for x in branch if x.action == "move(ot, mt)")
     assert back.worlds == 1 and "holding(R, r)" in back.state
+
+
+def test_prototype_pass_rule_makes_deferral_strictly_cheaper() -> None:
+    # with the human's pass after any robot wait taken away, holding r (back, wait, place w,
+    # place r: 5) beats boxing unseen and informing (6): the old P2 argument, which came from
+    # the pass rule rather than from a saving in work
+    p2 = ehatp.load(CUBES / "p2.toml")
+    p2.human = replace(p2.human, passes=Passes.PROTOTYPE)
+    out = search(ground_problem(p2))
+    assert out.values is not None
+    _, es = walk(p2, *AWAY[:3])
+    n = out.graph.index[es]
+    costs = {e.move.label: e.move.cost + out.values.value[e.child] for e in out.graph.edges[n]}
+    assert costs["wait"] == 5 and costs["place(r, box1)"] == costs["place(r, box2)"] == 6
 
 
 @pytest.mark.parametrize("path", sorted(str(p.relative_to(EX)) for p in EX.glob("*/*.toml")))
