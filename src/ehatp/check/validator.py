@@ -8,23 +8,32 @@ updates, the product of unseen robot turns and both agents' options with plain s
 Every node of the policy is recomputed from the initial state (after the fixed opening
 ``policy.after``) and its recorded facts, move, cost and value are compared with the
 recomputation. Checking stops at the first violation of a branch; other branches go on.
+
+The problem's options are read as the document states them: the human's pass rule and whether
+it anticipates unseen robot turns (``[human]``, §4), where and how the robot may inform and
+whether the human asks (``[communication]``, §5), and the objective the values are under
+(``[objective]``, §7). Both the worst-case and the expected value of every node are recomputed
+from the validator's own move costs.
 """
 
 from __future__ import annotations
 
 import itertools
-from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from typing import TypeVar
 
 from ..model.formula import And, Formula, StateFn, negate
 from ..model.grounding import FINISH, GModel, GOp, Grounded, ground_problem
+from ..model.options import InformWhere, ObjectiveKind, Passes, Relevance, Speech
 from ..model.problem import Problem
 from ..policy_format import Policy, PolicyNode
 
 ROBOT, HUMAN = 0, 1
 ACTION, WAIT, PASS, INFORM, ASK, START = "action", "wait", "pass", "inform", "ask", "start"
+SILENCE = "silence"  # the robot's silent move at a speech opening (section 5)
+BLOCKED = -2  # the end of a human plan where no action applies (relevance "plan", section 5)
 
 Agenda = tuple[int, ...]
 World = tuple[int, Agenda]  # (state, robot agenda the human attributes to the robot)
@@ -51,7 +60,9 @@ class Report:
 
 @dataclass(frozen=True)
 class EState:
-    """A search node of section 3: (turn, T, robot agenda, human agenda, W, k, passive)."""
+    """A search node of section 3: (turn, T, robot agenda, human agenda, W, k, passive), with,
+    at a human node, whether the robot's last move was a forced wait (section 4) and, at the
+    initial robot node of a speech opening, that it is one (section 5)."""
 
     turn: int
     true: int
@@ -60,6 +71,8 @@ class EState:
     worlds: Worlds
     k: int
     passive: int
+    forced: bool = False
+    opening: bool = False
 
 
 @dataclass(frozen=True)
@@ -73,6 +86,8 @@ class Step:
     cost: Fraction
     after: EState | None
     texts: tuple[str, ...] = ()  # ask: the conjuncts as printed, in any order
+    act: str = ""  # the action part of the label ("wait", "place(w, box2)"); "" for the rest
+    told: tuple[str, ...] = ()  # the literals said while acting (speech "with-action")
 
 
 @dataclass(frozen=True)
@@ -86,7 +101,8 @@ class HResult:
 
 
 def validate(problem: Problem, policy: Policy) -> Report:
-    """Check ``policy`` against ``problem`` (see the module docstring)."""
+    """Check ``policy`` against ``problem``: every rule of docs/semantics.md, sections 1-7 (see
+    the module docstring)."""
     return _Validator(problem, policy).run()
 
 
@@ -101,10 +117,17 @@ def _frac(x: object) -> Fraction:
 
 
 def _same(a: object, b: object) -> bool:
+    """Equal as exact numbers; a float (a JSON number that is not whole, or a planner's float)
+    is accepted within a relative 1e-9, since it cannot hold 1/3 exactly."""
     try:
-        return abs(_frac(a) - _frac(b)) < Fraction(1, 10**9)
+        x, y = _frac(a), _frac(b)
     except TypeError:
         return False
+    if x == y:
+        return True
+    if isinstance(a, float) or isinstance(b, float):
+        return abs(x - y) <= Fraction(1, 10**9) * max(Fraction(1), abs(x), abs(y))
+    return False
 
 
 def _num(x: Fraction) -> str:
@@ -133,20 +156,21 @@ class _Semantics:
         self.names = (problem.domain.robot_name, problem.domain.human_name)
         self.K = problem.K
         self.atom_of = {a: i for i, a in enumerate(g.atoms)}
+        self._plans: dict[tuple[Agenda, int, int], frozenset[tuple[int, ...]]] = {}
 
     # -- section 1: refinement -----------------------------------------------------------------
 
     @staticmethod
     def done_of(model: GModel, t: int) -> tuple[Formula, StateFn] | None:
-        """A task's done-condition: the operator's own, or the abstract task's."""
+        """§1: a task's done-condition: the operator's own, or the abstract task's."""
         op = model.ops.get(t)
         if op is not None:
             return (op.done_f, op.done) if op.done_f is not None and op.done is not None else None
         return model.done.get(t)
 
     def refine(self, model: GModel, agenda: Agenda, s: int) -> list[tuple[int, Agenda]]:
-        """refine(agenda, S): (first primitive action, remaining agenda) pairs; FINISH when
-        the agenda can be completed."""
+        """§1: refine(agenda, S): (first primitive action, remaining agenda) pairs; FINISH
+        when the agenda can be completed."""
         out: list[tuple[int, Agenda]] = []
 
         def go(ag: Agenda, depth: int) -> None:
@@ -173,7 +197,7 @@ class _Semantics:
         return _dedupe(out)
 
     def hrefine(self, agenda: Agenda, states: frozenset[int]) -> list[HResult]:
-        """The human's refinement over a set of world states: a condition holding in some
+        """§1: the human's refinement over a set of world states: a condition holding in some
         worlds only goes on in those worlds and is recorded as uncertain."""
         model = self.g.human
         out: list[HResult] = []
@@ -212,8 +236,8 @@ class _Semantics:
     # -- section 2: observation ----------------------------------------------------------------
 
     def observe(self, worlds: Worlds, t: int, atoms: Iterable[int]) -> Worlds:
-        """Learn T's value of each atom, in order: keep the worlds that agree; if none does,
-        set the atom to T's value in every world (belief revision)."""
+        """§2 and §5: learn T's value of each atom, in order: keep the worlds that agree; if
+        none does, set the atom to T's value in every world (belief revision)."""
         ws = set(worlds)
         for i in atoms:
             bit = 1 << i
@@ -222,10 +246,11 @@ class _Semantics:
         return frozenset(ws)
 
     def sa(self, worlds: Worlds, t: int) -> Worlds:
-        # step 2 of section 2 (step 1 is the special case where no revision happens)
+        """§2: situation assessment (step 2; step 1 is the case where no revision happens)."""
         return self.observe(worlds, t, _bits(self.g.visible_mask(t)))
 
     def cop(self, t: int) -> bool:
+        """§2: co-presence, on the true state."""
         return bool(self.g.copresent(t))
 
     # -- section 4: moves ----------------------------------------------------------------------
@@ -241,6 +266,10 @@ class _Semantics:
         return tuple(t for t in agenda if t in m.ops or t in m.methods or t in m.done)
 
     def product(self, worlds: Worlds) -> Worlds:
+        """§4: every world followed by the noop or a robot event the human anticipates there;
+        a non-anticipating human (``[human] anticipates = false``) imagines nothing."""
+        if not self.p.human.anticipates:
+            return worlds
         out: set[World] = set(worlds)  # the noop
         for s, tn in worlds:
             for a, rest in self.refine(self.g.robot_seen_by_human, tn, s):
@@ -249,22 +278,45 @@ class _Semantics:
         return frozenset(out)
 
     def set_inferable(self, worlds: Worlds, old: int, new: int) -> Worlds:
+        """§4: the inferable atoms an action changed in T are set in every world."""
         m = (old ^ new) & self.g.inferable_mask
         return frozenset(((s & ~m) | (new & m), ag) for s, ag in worlds)
 
+    def sees_robot_done(self, worlds: Worlds, true: int, robot: Agenda) -> Worlds:
+        """§4, non-anticipating human: whenever co-present in T (the initial one included)
+        with a robot agenda that can finish under T, it knows the robot is done (every world's
+        robot agenda is empty)."""
+        if (self.p.human.anticipates or not self.cop(true)
+                or (FINISH, ()) not in self.refine(self.g.robot, robot, true)):
+            return worlds
+        return frozenset((s, ()) for s, _ in worlds)
+
     def advance(self, es: EState, kind: str, true: int, robot: Agenda, human: Agenda,
-                worlds: Worlds, k: int) -> EState:
-        worlds = self.sa(worlds, true)
+                worlds: Worlds, k: int, forced: bool = False) -> EState:
+        """§3-§4: the node after a move: SA, k reset when co-present, the passive count."""
+        worlds = self.sees_robot_done(self.sa(worlds, true), true, robot)
         if self.cop(true):
             k = 0
         passive = es.passive + 1 if kind in (WAIT, PASS) else 0
-        return EState(1 - es.turn, true, robot, human, worlds, k, passive)
+        if es.opening:  # §5: the opening gives the turn to the human, no passive move counted
+            passive = es.passive
+        return EState(1 - es.turn, true, robot, human, worlds, k, passive, forced)
 
     def initial(self) -> EState:
+        """§1-§3 and §5: the initial node; a robot opening turn when the human starts, the
+        robot may speak while acting and an informing set exists in the initial state."""
         g = self.g
         worlds = self.sa(frozenset((s, self.attributed(ag)) for s, ag in g.beliefs), g.init)
+        # a non-anticipating human sees a robot with nothing left to do from the start, as
+        # situation assessment runs on the initial state too ("whenever", section 4)
+        worlds = self.sees_robot_done(worlds, g.init, g.robot_agenda)
         turn = ROBOT if self.p.starts == "robot" else HUMAN
-        return EState(turn, g.init, g.robot_agenda, g.human_agenda, worlds, 0, 0)
+        es = EState(turn, g.init, g.robot_agenda, g.human_agenda, worlds, 0, 0)
+        if turn == HUMAN and self.p.communication.speech == Speech.WITH_ACTION:
+            opening = replace(es, turn=ROBOT, opening=True)
+            if not isinstance(self.inform_search(opening), str):
+                return opening
+        return es
 
     def action_cost(self, agent: int, op: GOp) -> Fraction:
         model = self.p.domain.robot if agent == ROBOT else self.p.domain.human
@@ -272,6 +324,7 @@ class _Semantics:
         return _frac(self.p.costs.actions.get(op.schema, base))
 
     def robot_actions(self, es: EState) -> list[tuple[int, Agenda]]:
+        """§4: the robot's real action options (FINISH excluded); none while apart at k = K."""
         if not (self.cop(es.true) or es.k < self.K):
             return []
         return [(a, r) for a, r in self.refine(self.g.robot, es.robot, es.true) if a != FINISH]
@@ -294,22 +347,48 @@ class _Semantics:
         else:
             worlds, k = self.product(es.worlds), k + 1
         after = self.advance(es, ACTION, t2, rest, es.human, worlds, k)
-        return Step(ROBOT, ACTION, g.task_names[a], self.action_cost(ROBOT, op), after)
+        name = g.task_names[a]
+        return Step(ROBOT, ACTION, name, self.action_cost(ROBOT, op), after, act=name)
 
     def robot_wait(self, es: EState) -> Step:
+        """§4: the robot's wait; forced when it had no real action (every wait is, under
+        ``[human] passes = "prototype"``)."""
         worlds, k = es.worlds, es.k
         if not self.cop(es.true) and k < self.K:  # an unseen wait is an imagined event
             worlds, k = self.product(worlds), k + 1
-        after = self.advance(es, WAIT, es.true, es.robot, es.human, worlds, k)
-        return Step(ROBOT, WAIT, "wait", _frac(self.p.costs.wait), after)
+        forced = self.p.human.passes == Passes.PROTOTYPE or not self.robot_actions(es)
+        after = self.advance(es, WAIT, es.true, es.robot, es.human, worlds, k, forced)
+        return Step(ROBOT, WAIT, "wait", _frac(self.p.costs.wait), after, act="wait")
+
+    def silence(self, es: EState) -> Step:
+        """§5: the robot's silent move at a speech opening (cost 0, no effect)."""
+        after = self.advance(es, SILENCE, es.true, es.robot, es.human, es.worlds, es.k)
+        return Step(ROBOT, SILENCE, SILENCE, Fraction(0), after)
+
+    def literals(self, t: int, atoms: Iterable[int]) -> tuple[str, ...]:
+        return tuple(self.g.atoms[i] if t >> i & 1 else f"not {self.g.atoms[i]}"
+                     for i in atoms)
 
     def inform(self, es: EState, atoms: Sequence[int]) -> Step:
+        """§5: ``inform(A)``: the human learns T's value of every atom of A, nothing else is
+        witnessed (k unchanged, no world multiplied, also while apart)."""
         worlds = self.observe(es.worlds, es.true, sorted(atoms))
         after = self.advance(es, INFORM, es.true, es.robot, es.human, worlds, es.k)
-        told = (self.g.atoms[i] if es.true >> i & 1 else f"not {self.g.atoms[i]}"
-                for i in sorted(atoms))
-        label = f"inform({', '.join(told)})"
+        label = f"inform({', '.join(self.literals(es.true, sorted(atoms)))})"
         return Step(ROBOT, INFORM, label, _frac(self.p.costs.inform), after)
+
+    def informed(self, es: EState, atoms: Sequence[int]) -> EState:
+        """The node as it is once the human has heard ``inform(atoms)``, before the action
+        said with it runs (speech "with-action", section 5)."""
+        return replace(es, worlds=self.observe(es.worlds, es.true, sorted(atoms)))
+
+    def with_speech(self, es: EState, atoms: Sequence[int], st: Step) -> Step:
+        """§5: ``inform(A) + a``: A is heard first, then ``st`` (computed from the informed
+        node) runs as usual; the costs add up."""
+        told = self.literals(es.true, atoms)
+        label = f"inform({', '.join(told)}) + {st.act}"
+        return Step(ROBOT, st.kind, label, _frac(self.p.costs.inform) + st.cost, st.after,
+                    act=st.act, told=told)
 
     def conjuncts(self, conds: Sequence[Formula], states: frozenset[int]) -> list[Formula]:
         """The conjuncts of the uncertain conditions whose value differs between worlds."""
@@ -327,6 +406,8 @@ class _Semantics:
         return self.g.display.get(f, str(f))
 
     def human_options(self, es: EState) -> list[Step]:
+        """§4 (Human): certain actions, asks while co-present (unless ``[communication] ask =
+        false``), and pass by the pass rule (forced waits, ``passes_when_blocked``)."""
         g = self.g
         states = frozenset(s for s, _ in es.worlds)
         results = self.hrefine(es.human, states)
@@ -337,16 +418,17 @@ class _Semantics:
         for a, rest in certain:
             op = g.human.ops[a]
             cost = self.action_cost(HUMAN, op)
+            name = g.task_names[a]
             if not op.pre(es.true):
-                steps.append(Step(HUMAN, ACTION, g.task_names[a], cost, None))
+                steps.append(Step(HUMAN, ACTION, name, cost, None, act=name))
                 continue
             t2 = op.apply(es.true)
             worlds = frozenset((op.apply(s), ag) for s, ag in es.worlds)
             worlds = self.set_inferable(worlds, es.true, t2)
             after = self.advance(es, ACTION, t2, es.robot, rest, worlds, es.k)
-            steps.append(Step(HUMAN, ACTION, g.task_names[a], cost, after))
+            steps.append(Step(HUMAN, ACTION, name, cost, after, act=name))
         asks: list[frozenset[Formula]] = []
-        if cop:
+        if cop and self.p.communication.ask:
             for r in results:
                 if r.states == states:
                     continue
@@ -364,27 +446,56 @@ class _Semantics:
                 after = self.advance(es, ASK, es.true, es.robot, es.human, worlds, es.k)
                 steps.append(Step(HUMAN, ASK, f"ask({' and '.join(texts)})",
                                   _frac(self.p.costs.ask), after, texts))
-        after_wait = es.passive > 0  # the robot's last move was a wait
         if cop:
-            may_pass = not (after_wait and certain)
-            if after_wait and asks and not self.p.human.passes_when_blocked:
-                may_pass = False
+            # right after a forced robot wait, a human with a certain action does not idle
+            may_pass = not (es.forced and certain)
+            if es.forced and asks and not self.p.human.passes_when_blocked:
+                may_pass = False  # a blocked human asks rather than waiting silently
         else:
             may_pass = not certain
         if may_pass:
             after = self.advance(es, PASS, es.true, es.robot, es.human, es.worlds, es.k)
-            steps.append(Step(HUMAN, PASS, "pass", _frac(self.p.costs.pass_), after))
+            steps.append(Step(HUMAN, PASS, "pass", _frac(self.p.costs.pass_), after, act="pass"))
         return steps
 
-    # -- section 5: relevance of a divergence --------------------------------------------------
+    # -- section 5: relevance of a divergence, the informing set -------------------------------
 
     def human_view(self, agenda: Agenda, states: frozenset[int]) -> frozenset[tuple[int, Agenda,
                                                                                       bool]]:
         return frozenset((r.action, r.rest, r.states == states)
                          for r in self.hrefine(agenda, states))
 
-    def views_differ(self, es: EState, worlds: Worlds) -> tuple[bool, bool]:
-        """(human's options differ, anticipated robot actions differ) between W and T."""
+    def plans(self, agenda: Agenda, s: int) -> frozenset[tuple[int, ...]]:
+        """§5 (relevance "plan"): plans(S), the sequences of human actions refining ``agenda``
+        with M_H in the single state S, each action applied and the robot idle, up to the end
+        of the agenda (FINISH) or ``plan_horizon`` actions; a sequence that ends early where
+        no action applies ends with BLOCKED."""
+        memo = self._plans
+
+        def go(ag: Agenda, st: int, n: int) -> frozenset[tuple[int, ...]]:
+            key = (ag, st, n)
+            got = memo.get(key)
+            if got is not None:
+                return got
+            if n == 0:
+                out: set[tuple[int, ...]] = {()}
+            else:
+                res = self.refine(self.g.human, ag, st)
+                out = set() if res else {(BLOCKED,)}
+                for a, rest in res:
+                    if a == FINISH:
+                        out.add((FINISH,))
+                        continue
+                    nxt = go(rest, self.g.human.ops[a].apply(st), n - 1)
+                    out.update((a, *tail) for tail in nxt)
+            memo[key] = frozenset(out)
+            return memo[key]
+
+        return go(agenda, s, self.p.communication.plan_horizon)
+
+    def views_differ(self, es: EState, worlds: Worlds) -> tuple[bool, bool, bool]:
+        """(human's options differ, anticipated robot options differ, human plans differ)
+        between W and T; the third is always False under relevance "next"."""
         states = frozenset(s for s, _ in worlds)
         human = self.human_view(es.human, states) != self.human_view(es.human,
                                                                      frozenset({es.true}))
@@ -393,13 +504,69 @@ class _Semantics:
         expected = {a for s, tn in worlds
                     for a, _ in self.refine(self.g.robot_seen_by_human, tn, s)}
         real = {a for a, _ in self.refine(self.g.robot, es.robot, es.true)}
-        return human, expected != real
+        plans = False
+        if self.p.communication.relevance == Relevance.PLAN:
+            mine = self.plans(es.human, es.true)
+            plans = any(self.plans(es.human, s) != mine for s in states)
+        return human, expected != real, plans
+
+    def inform_where(self, es: EState) -> str | None:
+        """§5: why no ``inform`` may be offered here for where the agents are (None if it
+        may). Under ``inform = "anywhere"`` an inform is heard while apart even at k = K: it
+        is no robot turn the human imagines (no world multiplied, k unchanged), so the K bound
+        of section 4, which limits what the robot does unseen, does not apply to it."""
+        if self.cop(es.true) or self.p.communication.inform == InformWhere.ANYWHERE:
+            return None
+        return "inform is offered only while co-present"
+
+    def inform_search(self, es: EState) -> tuple[str, int, list[tuple[int, ...]]] | str:
+        """§5: the informing sets allowed here: (what they fix, their size, every smallest set
+        that fixes it, in canonical order), or why no ``inform`` is offered.
+
+        Sets fixing the human's options, the anticipated robot options (and, under relevance
+        "plan", the plans) come first; failing those, sets fixing the human's options (and the
+        plans) -- only when those differ: a set cannot fix what is not broken, and telling the
+        human something that changes none of its options is not worth a move."""
+        why = self.inform_where(es)
+        if why is not None:
+            return why
+        plan = self.p.communication.relevance == Relevance.PLAN
+        now = self.views_differ(es, es.worlds)
+        if not any(now):
+            return ("the divergence is not relevant (the human's and the anticipated robot's "
+                    "options" + (" and the human's plans" if plan else "") +
+                    " on W equal those on T)")
+        div = 0
+        for s, _ in es.worlds:
+            div |= s ^ es.true
+        cands = _bits(div)
+        limit = self.p.communication.inform_max_atoms
+        fixed: dict[tuple[int, ...], tuple[bool, bool, bool]] = {}
+        for n in range(1, limit + 1):
+            for sub in itertools.combinations(cands, n):
+                h, r, p = self.views_differ(es, self.observe(es.worlds, es.true, sub))
+                fixed[sub] = (not h, not r, not p)
+        both = "the human's views" + (" and plans" if plan else "")
+        alone = "the human's options" + (" and plans" if plan else "")
+        tiers: list[tuple[str, Callable[[tuple[bool, bool, bool]], bool]]] = [(both, all)]
+        if now[0] or now[2]:
+            tiers.append((alone, lambda f: f[0] and f[2]))
+        for what, test in tiers:
+            for n in range(1, limit + 1):
+                sets = [a for a, f in fixed.items() if len(a) == n and test(f)]
+                if sets:
+                    return what, n, sets
+        if len(tiers) == 1:
+            return (f"no set of at most inform_max_atoms = {limit} atoms fixes {both}, and the "
+                    "human's options" + (" and plans" if plan else "") + " need no fixing")
+        return f"no set of at most inform_max_atoms = {limit} atoms fixes {alone}"
 
     def check_inform(self, es: EState, atoms: Sequence[int]) -> str | None:
-        """Why ``inform(atoms)`` is not a legal robot option here (None when it is)."""
+        """§5: why ``inform(atoms)`` is not a legal robot option here (None when it is)."""
         g = self.g
-        if not self.cop(es.true):
-            return "inform is offered only while co-present"
+        why = self.inform_where(es)
+        if why is not None:
+            return why
         div = 0
         for s, _ in es.worlds:
             div |= s ^ es.true
@@ -407,48 +574,38 @@ class _Semantics:
             if not div >> i & 1:
                 return (f"every world already agrees with the truth on {g.atoms[i]}: "
                         "informing the human of what it believes is never generated")
-        hd, rd = self.views_differ(es, es.worlds)
-        if not (hd or rd):
-            return "the divergence is not relevant (the human's and the anticipated robot's " \
-                   "options on W equal those on T)"
         limit = self.p.communication.inform_max_atoms
+        found = self.inform_search(es)
+        if isinstance(found, str):
+            return found
         if len(atoms) > limit:
             return f"informs {len(atoms)} atoms, more than inform_max_atoms = {limit}"
-        cands = _bits(div)
+        what, n, sets = found
+        mine = tuple(sorted(atoms))
+        if mine in sets:
+            return self.check_choice(es, mine, sets)
+        h, r, p = self.views_differ(es, self.observe(es.worlds, es.true, mine))
+        fixes = (not h and not p) if what.startswith("the human's options") else not (h or r or p)
+        if not fixes:
+            return f"it does not fix {what}, yet a set of {n} atom(s) does"
+        if what.startswith("the human's options"):
+            return f"not a smallest set fixing {what}: {len(atoms)} atoms where {n} suffice"
+        return f"not a smallest fixing set: {len(atoms)} atoms where {n} suffice"
 
-        def fixes(a: Sequence[int]) -> tuple[bool, bool]:
-            w2 = self.observe(es.worlds, es.true, sorted(a))
-            h, r = self.views_differ(es, w2)
-            return not h, not r
+    def check_choice(self, es: EState, atoms: tuple[int, ...],
+                     sets: list[tuple[int, ...]]) -> str | None:
+        """§5: among smallest sets, the one leaving the fewest worlds, then telling more true
+        atoms, then the first by atom names."""
+        def key(a: tuple[int, ...]) -> tuple[int, int, tuple[str, ...]]:
+            left = len(self.observe(es.worlds, es.true, a))
+            return left, -sum(es.true >> i & 1 for i in a), tuple(self.g.atoms[i] for i in a)
 
-        both = human = None
-        for n in range(1, limit + 1):
-            for sub in itertools.combinations(cands, n):
-                fh, fr = fixes(sub)
-                if fh and human is None:
-                    human = n
-                if fh and fr:
-                    both = n
-                    break
-            if both is not None:
-                break
-        fh, fr = fixes(atoms)
-        if both is not None:
-            if not (fh and fr):
-                return f"it does not make the human's views equal to the truth, yet a set of " \
-                       f"{both} atom(s) does"
-            if len(atoms) != both:
-                return f"not a smallest fixing set: {len(atoms)} atoms where {both} suffice"
+        best = min(sets, key=key)
+        if best == atoms:
             return None
-        if human is None:
-            return "no set of at most inform_max_atoms atoms fixes the human's options"
-        if not fh:
-            return "it does not fix the human's options, yet a set of " \
-                   f"{human} atom(s) does"
-        if len(atoms) != human:
-            return f"not a smallest set fixing the human's options: {len(atoms)} atoms " \
-                   f"where {human} suffice"
-        return None
+        told = ", ".join(self.literals(es.true, best))
+        return f"not the informing set the rules choose among smallest sets (fewest worlds " \
+               f"left, then more true atoms, then atom names): inform({told})"
 
     # -- section 6: goal -----------------------------------------------------------------------
 
@@ -512,6 +669,8 @@ class _Validator:
         self.branches_checked = 0
         self.goals_reached: set[int] = set()  # goal leaves whose branch checked out
         self.step_cost: dict[int, Fraction] = {}  # node id -> the cost of the move into it
+        self.weight: dict[int, Fraction] = {}  # node id -> the move's weight (section 7)
+        self.turn: dict[int, int] = {}  # node id -> who moves next there (checked nodes)
 
     def fail(self, path: Sequence[str], rule: str) -> None:
         self.violations.append(f"branch [{', '.join(path)}]: {rule}")
@@ -525,25 +684,39 @@ class _Validator:
     # -- moves ---------------------------------------------------------------------------------
 
     def robot_steps(self, es: EState, label: str) -> list[Step] | str:
-        """The robot moves a policy label can denote here, or why it is not an option."""
+        """The robot moves a policy label can denote here (§4, §5), or why it is not an
+        option."""
         sem, g = self.sem, self.sem.g
+        if es.opening:
+            if label == SILENCE:
+                return [sem.silence(es)]
+            if not label.startswith("inform(") or " + " in label:
+                return f"at the speech opening (section 5) the robot may only inform or stay " \
+                       f"silent, not {label}"
+            r = self.inform_atoms(es, label)
+            return r if isinstance(r, str) else [sem.inform(es, r)]
+        if label == SILENCE:
+            return "silence is a move only at the speech opening, before the human's first " \
+                   "move (section 5)"
+        if " + " in label:
+            if self.problem.communication.speech != Speech.WITH_ACTION:
+                return 'speaking while acting needs [communication] speech = "with-action" ' \
+                       '(section 5)'
+            said, _, act = label.partition(" + ")
+            if act.startswith("inform(") or act == SILENCE:
+                return f"{act} cannot be said with an inform; only an action or wait can"
+            r = self.inform_atoms(es, said)
+            if isinstance(r, str):
+                return r
+            steps = self.robot_steps(sem.informed(es, r), act)
+            if isinstance(steps, str):
+                return steps
+            return [sem.with_speech(es, r, st) for st in steps]
         if label == "wait":
             return [sem.robot_wait(es)]
         if label.startswith("inform("):
-            parsed = sem.parse_inform(label)
-            if isinstance(parsed, str):
-                return parsed
-            atoms = [i for i, _ in parsed]
-            if len(set(atoms)) != len(atoms):
-                return "an atom is told twice"
-            if not sem.cop(es.true):
-                return "inform is offered only while co-present"
-            for i, value in parsed:  # the label tells literals of T
-                if bool(es.true >> i & 1) != value:
-                    return f"the label tells {g.atoms[i]} is {str(value).lower()}, but it is " \
-                           f"{str(not value).lower()} in T"
-            why = sem.check_inform(es, atoms)
-            return why if why is not None else [sem.inform(es, atoms)]
+            r = self.inform_atoms(es, label)
+            return r if isinstance(r, str) else [sem.inform(es, r)]
         if label == "pass" or label.startswith("ask("):
             return f"{label} is not a robot move"
         opts = [(a, r) for a, r in sem.robot_actions(es) if g.task_names[a] == label]
@@ -560,6 +733,25 @@ class _Validator:
         agenda = [g.task_names[t] for t in es.robot]
         return f"{label} is not the first action of any refinement of the robot agenda " \
                f"{agenda} under T"
+
+    def inform_atoms(self, es: EState, label: str) -> list[int] | str:
+        """The atoms of ``inform(...)`` in label order, if it is a legal inform here (§5)."""
+        sem, g = self.sem, self.sem.g
+        parsed = sem.parse_inform(label)
+        if isinstance(parsed, str):
+            return parsed
+        atoms = [i for i, _ in parsed]
+        if len(set(atoms)) != len(atoms):
+            return "an atom is told twice"
+        why = sem.inform_where(es)
+        if why is not None:
+            return why
+        for i, value in parsed:  # the label tells literals of T
+            if bool(es.true >> i & 1) != value:
+                return f"the label tells {g.atoms[i]} is {str(value).lower()}, but it is " \
+                       f"{str(not value).lower()} in T"
+        why = sem.check_inform(es, atoms)
+        return why if why is not None else atoms
 
     def human_steps(self, es: EState, label: str,
                     options: list[Step] | None = None) -> list[Step]:
@@ -589,6 +781,13 @@ class _Validator:
         cmp("k", node.k, es.k)
         cmp("worlds", node.worlds, len(es.worlds))
         cmp("to_move", node.to_move, None if goal else self.name(es.turn))
+        if (node.kind == START and not self.policy.after and es.turn == HUMAN and not goal
+                and node.to_move == self.name(ROBOT)
+                and self.problem.communication.speech == Speech.WITH_ACTION):
+            why = sem.inform_search(replace(es, turn=ROBOT, opening=True))
+            if isinstance(why, str):  # the robot may not open: say why (section 5)
+                bad.append(f"no speech opening, since no informing set exists in the initial "
+                           f"state: {why}")
         cmp("goal", node.goal, goal)
         div = 0
         diffs = []
@@ -675,6 +874,7 @@ class _Validator:
         if pol.agents != {"robot": sem.names[ROBOT], "human": sem.names[HUMAN]}:
             self.fail([], f"policy agents {pol.agents} are not the domain's")
         self.check_costs()
+        self.check_objective()
         root_es = self.replay_after()
         if root_es is not None:
             root = nodes[0]
@@ -726,6 +926,7 @@ class _Validator:
         nodes = self.policy.nodes
         where = f"node {node.id} ({node.agent or ''} {node.action})".replace("( ", "(")
         goal = sem.is_goal(es)
+        self.turn[node.id] = es.turn
         bad = self.facts(node, es, goal)
         if bad:
             self.fail(path, f"{where}: recorded facts differ from the semantics: "
@@ -788,18 +989,24 @@ class _Validator:
             self.fail(cpath, f"{where}: name and args are {child.name!r} {list(child.args)}, "
                       f"expected {want_call[0]!r} {want_call[1]}")
             return False
+        if list(child.told) != list(st.told):
+            self.fail(cpath, f"{where}: told is {list(child.told)}, but the move says "
+                      + (f"{list(st.told)}" if st.told else "nothing")
+                      + " (speech, section 5)")
+            return False
         if not _same(child.cost, st.cost):
             self.fail(cpath, f"{where}: cost is {child.cost}, but the move costs "
                       f"{_num(st.cost)} under the problem's costs (section 7)")
             return False
         self.step_cost[child.id] = st.cost
+        self.weight[child.id] = self.problem.objective.weight(child.action, want_call[0])
         return True
 
     def call(self, st: Step) -> tuple[str, list[str]]:
         """The name and arguments a policy records for a move (docs/policy-format.md)."""
         g = self.sem.g
         if st.kind == ACTION:
-            op = (g.robot if st.agent == ROBOT else g.human).ops[g.task_index[st.label]]
+            op = (g.robot if st.agent == ROBOT else g.human).ops[g.task_index[st.act]]
             return op.schema, list(op.args)
         if st.kind == INFORM:
             parsed = self.sem.parse_inform(st.label)
@@ -807,7 +1014,7 @@ class _Validator:
             return INFORM, [g.atoms[i] if v else f"not {g.atoms[i]}" for i, v in parsed]
         if st.kind == ASK:
             return ASK, [st.label[len("ask("):-1]]
-        return st.kind, []
+        return st.kind, []  # wait, pass, silence (also a wait said with an inform)
 
     def robot_node(self, node: PolicyNode, es: EState, path: list[str],
                    kids: list[PolicyNode], where: str) -> list[tuple[PolicyNode, Step]]:
@@ -882,10 +1089,12 @@ class _Validator:
 
     # -- values and the summary ----------------------------------------------------------------
 
-    def values(self) -> dict[int, Fraction | None]:
-        """Worst-case cost-to-go from the validator's own move costs; None under a violation."""
+    def values(self) -> tuple[dict[int, Fraction | None], dict[int, Fraction | None]]:
+        """§7: the worst-case and the expected cost-to-go of every node, from the validator's
+        own move costs and the problem's weights; None under a violation."""
         nodes = self.policy.nodes
-        val: dict[int, Fraction | None] = {}
+        worst: dict[int, Fraction | None] = {}
+        mean: dict[int, Fraction | None] = {}
         order: list[int] = []
         stack, seen = [0], set()
         while stack:
@@ -897,44 +1106,77 @@ class _Validator:
             stack.extend(nodes[n].children)
         for n in reversed(order):
             node = nodes[n]
+            worst[n] = mean[n] = None
             if not node.children:
-                val[n] = Fraction(0) if n in self.goals_reached else None
+                if n in self.goals_reached:
+                    worst[n] = mean[n] = Fraction(0)
                 continue
-            parts: list[Fraction] = []
+            turn = self.turn.get(n)
+            if turn is None or (turn == ROBOT and len(node.children) != 1):
+                continue
+            parts: list[tuple[Fraction, Fraction, Fraction]] = []
             for c in node.children:
-                v, cost = val.get(c), self.step_cost.get(c)
-                if v is None or cost is None:
+                w, m, cost = worst.get(c), mean.get(c), self.step_cost.get(c)
+                if w is None or m is None or cost is None:
                     break
-                parts.append(cost + v)
+                parts.append((cost + w, cost + m, self.weight.get(c, Fraction(1))))
             else:
-                val[n] = max(parts) if parts else None
-                continue
-            val[n] = None
-        return val
+                worst[n] = max(p[0] for p in parts)
+                total = sum((p[2] for p in parts), Fraction(0))
+                mean[n] = sum((p[2] * p[1] for p in parts), Fraction(0)) / total
+        return worst, mean
+
+    def check_objective(self) -> None:
+        """§7: the policy's objective is the problem's (kind, and weights and ties if given)."""
+        got, want = self.policy.objective, self.problem.objective
+        kind = got.get("kind") if isinstance(got, dict) else None
+        if kind != want.kind.value:
+            self.fail([], f"policy objective kind is {kind!r}, but the problem's objective is "
+                      f"{want.kind.value!r} (section 7)")
+            return
+        weights = got.get("weights")
+        if weights is not None:
+            mine = {"".join(str(k).split()): v for k, v in dict(weights).items()}
+            if set(mine) != set(want.weights) or any(not _same(mine[k], want.weights[k])
+                                                     for k in mine):
+                theirs = ", ".join(f"{k!r}: {_num(v)}" for k, v in want.weights.items())
+                self.fail([], f"policy objective weights are {dict(weights)}, but the "
+                          f"problem's are {{{theirs}}} (section 7)")
+        ties = got.get("ties")
+        if ties is not None and list(ties) != list(want.ties):
+            self.fail([], f"policy objective ties are {list(ties)}, but the problem's are "
+                      f"{list(want.ties)} (section 7)")
 
     def check_summary(self) -> None:
         pol = self.policy
         nodes = pol.nodes
-        val = self.values()
+        worst, mean = self.values()
+        expected = self.problem.objective.kind == ObjectiveKind.EXPECTED
+        val, what = (mean, "expected") if expected else (worst, "worst-case")
         paths = self.paths()
         for n in sorted(val, key=lambda i: len(paths.get(i, []))):
             v = val[n]
             if v is not None and not _same(nodes[n].value, v):
                 node = nodes[n]
-                self.fail(paths.get(n, []), f"node {n} ({node.agent or ''} {node.action}): "
-                          f"value is {node.value}, but its worst-case cost-to-go is {_num(v)}"
-                          " (section 7)")
+                who = f"{node.agent} {node.action}" if node.agent else node.action
+                self.fail(paths.get(n, []), f"node {n} ({who}): value is {node.value}, but "
+                          f"its {what} cost-to-go is {_num(v)} (section 7)")
         root_value = val.get(0)
         if not _same(pol.cost, nodes[0].value):
             self.fail([], f"policy cost is {pol.cost}, but the root's value is "
                       f"{nodes[0].value}")
         elif root_value is not None and not _same(pol.cost, root_value):
-            self.fail([], f"policy cost is {pol.cost}, but the worst-case cost is "
+            self.fail([], f"policy cost is {pol.cost}, but the {what} cost is "
                       f"{_num(root_value)}")
-        comms = sum(1 for n in nodes if n.kind in (INFORM, ASK))
+        for name, got, want in (("worst_case", pol.worst_case, worst.get(0)),
+                                ("expected", pol.expected, mean.get(0))):
+            if got is not None and want is not None and not _same(got, want):
+                self.fail([], f"policy {name} is {got}, but the policy's "
+                          f"{name.replace('_', '-')} cost is {_num(want)} (section 7)")
+        comms = sum(1 for n in nodes if n.kind in (INFORM, ASK) or n.told)
         if pol.communications != comms:
             self.fail([], f"communications is {pol.communications}, but the policy has "
-                      f"{comms} inform/ask moves")
+                      f"{comms} inform/ask moves and moves said with an inform")
         leaves = sum(1 for n in nodes if not n.children)
         if pol.leaves != leaves:
             self.fail([], f"leaves is {pol.leaves}, but the policy has {leaves} leaves")
