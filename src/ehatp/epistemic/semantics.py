@@ -130,7 +130,9 @@ class Semantics:
         worlds = self.assess(g.init, normalize((s, self.attributed(ag)) for s, ag in g.beliefs))
         worlds = self.sees_done(g.init, g.robot_agenda, worlds)
         es = EState(turn, g.init, g.robot_agenda, g.human_agenda, worlds, 0, 0)
-        if turn == HUMAN and self.comm.speech == Speech.WITH_ACTION and self.informing_set(es):
+        if (turn == HUMAN and self.comm.speech == Speech.WITH_ACTION
+                and (self.copresent(g.init) or self.comm.inform == InformWhere.ANYWHERE)
+                and self.informing_set(es)):
             # §5: the robot may speak before the human's very first move
             es = es._replace(turn=ROBOT, opening=True)
         return es
@@ -416,12 +418,14 @@ class Semantics:
         r = self._plans.get(key)
         if r is None:
             out: set[tuple[int, ...]] = set()
-            opts = self.H.refine(agenda, s)
-            if not opts:
+            opts = self.H.refine(agenda, s) if left else ()
+            if not left:
+                out.add((HORIZON,))
+            elif not opts:
                 out.add((BLOCKED,))
             for op, rest in opts:
-                if op == FINISH or left == 0:
-                    out.add((op if op == FINISH else HORIZON,))
+                if op == FINISH:
+                    out.add((FINISH,))
                     continue
                 s2 = self.g.human.ops[op].apply(s)
                 out.update((op, *tail) for tail in self._plans_from(rest, s2, left - 1))
