@@ -699,8 +699,8 @@ def _failure(r: _Reader, ref: str, e: BaseException, files: set[str],
         detail = str(e)
     else:
         detail = f"{type(e).__name__}: {e}" if str(e) else type(e).__name__
-    if what:
-        return r.err("[domain]", f"{what} for {ref!r}{at}: {detail}", "fix the option")
+    if what:  # the factory refused an option: where in its code does not help
+        return r.err("[domain]", f"{what} for {ref!r}: {detail}", "fix the option")
     verb = "is malformed" if isinstance(e, DomainError) else "failed"
     return r.err("[domain] name", f"domain {ref!r} {verb}{at}: {detail}",
                  "fix the domain module (it is Python code, run as such)", ref)

@@ -23,16 +23,15 @@ MAX_SHOWN = 120  # characters of a ground goal part; a whole expanded formula wo
 
 def diagnose(grounded: Grounded, graph: Graph, line_of_play: Callable[[], str]) -> str:
     """Why the problem is unsolvable. If the search explored everything reachable: a goal
-    literal no state reaches, goal literals that never hold together, or (with
-    ``line_of_play()``, one failing line, as an example) agendas that never finish where the
-    goal holds. Otherwise, or when the goal is reachable, just ``line_of_play()``."""
+    literal no state reaches, goal literals that never hold together, or agendas that never
+    finish where the goal holds, each followed by ``line_of_play()`` (one failing line) as an
+    example. Otherwise, or when a goal state is reachable, just ``line_of_play()``."""
     if not _complete(graph):  # a cut-off state might reach the goal: claim nothing
         return line_of_play()
-    why = _goal_unreached(grounded, graph)
-    if why is not None:
-        return why
-    why = _agendas(grounded, graph)
-    return f"{why}; e.g. {line_of_play()}" if why is not None else line_of_play()
+    why = _goal_unreached(grounded, graph) or _agendas(grounded, graph)
+    # the line of play stays as an example: it shows what stands in the way (a false belief,
+    # a deadlock), the diagnosis says what is never reached
+    return f"{why}; one failing line: {line_of_play()}" if why is not None else line_of_play()
 
 
 def _complete(graph: Graph) -> bool:
