@@ -1,7 +1,9 @@
 """The ``ehatp`` command line: solve, show, validate, bench (render and simulate plug in).
 
 Exit codes: 0 success, 1 no policy (or an invalid one, or an unsolved benchmark row), 2 bad
-input. Bad input is always one line on stderr, ``FILE:PLACE: problem; fix``, never a traceback.
+input, 3 internal error. Bad input is always one line on stderr, ``FILE:PLACE: problem; fix``,
+never a traceback; an internal error is one line naming the file that holds the traceback
+(``ehatp --debug`` shows it instead). See ``common.py``.
 """
 
 from __future__ import annotations
@@ -23,11 +25,20 @@ from ..policy_format import Policy
 from ..search.andor import Stats
 from ..search.planner import Result, solve
 from . import bench as bench_mod
-from .common import EXIT_NO_POLICY, EXIT_OK, die, user_errors
+from .common import (
+    EXIT_NO_POLICY,
+    EXIT_OK,
+    Commands,
+    check_policy_problem,
+    die,
+    read_policy,
+    user_errors,
+)
 from .show import fmt_cost, plain, policy_lines, print_rich
 
 app = typer.Typer(
     name="ehatp",
+    cls=Commands,  # usage mistakes and internal errors end in one line too
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_show_locals=False,
@@ -46,10 +57,16 @@ def load_problem(path: Path) -> Problem:
     raise AssertionError  # unreachable: user_errors exits; keeps type checkers content
 
 
-def load_policy(path: Path) -> Policy:
+def load_policy(path: Path, problem: Path | None = None, *, counts: bool = True) -> Policy:
+    """The policy at ``path``, its structure checked (see ``common.read_policy``), and with
+    ``problem`` checked to be the one it was planned for; a mistake is one line, exit 2."""
     with user_errors(path):
-        return Policy.load(path)
-    raise AssertionError
+        pol = read_policy(path, counts=counts)
+    if problem is not None:
+        prob = load_problem(problem)
+        with user_errors(path):
+            check_policy_problem(pol, path, prob)
+    return pol
 
 
 def stderr_console() -> Console | None:
@@ -106,13 +123,16 @@ def _root(
     version: Annotated[bool, typer.Option(
         "--version", callback=_version, is_eager=True,
         help="Print the version and exit.")] = False,
+    debug: Annotated[bool, typer.Option(
+        "--debug", help="On an internal error, print the traceback instead of writing it to "
+                        "a file.")] = False,
 ) -> None:
     """Epistemic Human-Aware Task Planner: plan robot policies that account for what the human
     sees, believes and may be told.
 
     Typical use: `ehatp solve problem.toml --out policy.json`, then `ehatp show policy.json`
     and `ehatp validate problem.toml policy.json`. Exit codes: 0 ok, 1 no (valid) policy,
-    2 bad input.
+    2 bad input, 3 internal error (a bug: the line names a file with the details).
     """
 
 
@@ -214,6 +234,9 @@ def show_cmd(
     details: Annotated[bool, typer.Option(
         "--details", "-d", help="Under each tree node, list what the human is unsure about "
                                 "and the K-counter.")] = False,
+    problem: Annotated[Path | None, typer.Option(
+        "--problem", "-p", help="Check that the policy was planned for this problem file.",
+        metavar="PROBLEM.toml", show_default=False)] = None,
 ) -> None:
     """Print a policy as an indented tree and as one timeline per branch.
 
@@ -221,8 +244,9 @@ def show_cmd(
     marks apart, COMM for a communication, GOAL). Straight runs stay at one indent; the tree
     forks only where the human chooses. Timelines: turns while the agents are together,
     parallel lanes while they are apart. Colour on a terminal, plain text in a pipe.
+    The file's structure is checked first (exit 2 if it was edited into something else).
     """
-    pol = load_policy(policy)
+    pol = load_policy(policy, problem)
     lines = policy_lines(pol, tree=tree, timelines=timelines, details=details)
     if sys.stdout.isatty():
         print_rich(lines, Console())
@@ -249,7 +273,7 @@ def validate_cmd(
     import ehatp  # the package-level validate(), so the validator loads only when needed
 
     prob = load_problem(problem)
-    pol = load_policy(policy)
+    pol = load_policy(policy, counts=False)  # whether counts match is the validator's call
     if pol.problem != prob.name:  # legal to check, but most likely the wrong pair of files
         typer.echo(f"note: {policy} was planned for {pol.problem!r}, not {prob.name!r}",
                    err=True)

@@ -28,8 +28,9 @@ import graphviz  # type: ignore[import-untyped]
 import typer
 
 from ..errors import InputError
+from ..model.problem import load
 from ..policy_format import Policy, PolicyNode
-from .common import die, user_errors
+from .common import Commands, check_policy_problem, die, read_policy, user_errors
 
 DEFAULT_MAX_NODES = 400  # more than this and a drawing stops being readable
 COMM_KINDS = ("inform", "ask")
@@ -294,11 +295,12 @@ def to_html(policy: Policy, *, max_depth: int | None = None,
 # --------------------------------------------------------------------------- command
 
 
-def render(path: str | Path, fmt: Format = Format.dot, *, max_depth: int | None = None,
+def render(path: str | Path | Policy, fmt: Format = Format.dot, *, max_depth: int | None = None,
            max_nodes: int | None = DEFAULT_MAX_NODES,
            share: bool | None = None) -> tuple[str, list[str]]:
-    """The rendered text and the collapse notes (empty when drawn whole)."""
-    policy = Policy.load(path)
+    """The rendered text and the collapse notes (empty when drawn whole). A path is read
+    with its structure checked (:func:`~ehatp.tools.common.read_policy`)."""
+    policy = path if isinstance(path, Policy) else read_policy(path)
     if fmt is Format.html:
         return to_html(policy, max_depth=max_depth, max_nodes=max_nodes), []
     view = plan_view(policy, max_depth=max_depth, max_nodes=max_nodes, share=share)
@@ -319,11 +321,23 @@ def render_command(
     share: bool | None = typer.Option(None, "--share/--no-share",
                                       help="Draw identical subtrees once "
                                            "[default: only when over --max-nodes]."),
+    problem: Path | None = typer.Option(None, "--problem", "-p", metavar="PROBLEM.toml",
+                                        help="Check that the policy was planned for this "
+                                             "problem file."),
 ) -> None:
-    """Draw a policy as Graphviz DOT or SVG, or as a self-contained HTML explorer."""
+    """Draw a policy as Graphviz DOT or SVG, or as a self-contained HTML explorer.
+
+    The file's structure is checked first (exit 2 if it was edited into something else)."""
+    with user_errors(policy):
+        pol = read_policy(policy)
+    if problem is not None:
+        with user_errors(problem):
+            prob = load(problem)
+        with user_errors(policy):
+            check_policy_problem(pol, policy, prob)
     with user_errors(policy):
         try:
-            text, notes = render(policy, fmt, max_depth=max_depth, max_nodes=max_nodes,
+            text, notes = render(pol, fmt, max_depth=max_depth, max_nodes=max_nodes,
                                  share=share)
         except DotMissing as e:
             die(str(e))
@@ -346,7 +360,7 @@ def register(app: typer.Typer) -> None:
 
 def main() -> None:
     """``python -m ehatp.tools.render POLICY.json ...`` without the rest of the CLI."""
-    app = typer.Typer(add_completion=False)
+    app = typer.Typer(add_completion=False, cls=Commands)
     app.command()(render_command)
     app()
 

@@ -21,8 +21,7 @@ import typer
 from ..epistemic.semantics import Move
 from ..errors import InputError
 from ..model.problem import Cost, Problem, load
-from ..policy_format import Policy
-from .common import user_errors
+from .common import read_policy, user_errors
 from .executor import ExecutionError, Executor, PolicyMismatch, UncoveredHumanAction
 
 MODES = ("ask", "random", "first", "script")
@@ -222,7 +221,7 @@ def run(problem_path: Path, *, policy_path: Path | None = None, human: str = "fi
         raise InputError("--script", "", f"a script is only read with --human script, "
                          f"not {human}", "drop --script or use --human script")
     problem: Problem = load(problem_path)
-    policy = Policy.load(policy_path) if policy_path is not None else None
+    policy = read_policy(policy_path) if policy_path is not None else None
     try:
         ex = Executor(problem, policy)
     except PolicyMismatch as e:
