@@ -14,6 +14,11 @@ $(VENV)/.installed: pyproject.toml
 demo: $(VENV)/.installed
 	$(BIN)/ehatp solve examples/cubes/p2.toml --out p2.policy.json
 	$(BIN)/ehatp show p2.policy.json
+	@echo
+	@echo "ehatp is installed in $(VENV). To type 'ehatp ...' as the README does, run this once in"
+	@echo "each new shell (or call $(BIN)/ehatp):"
+	@echo
+	@echo "    . $(VENV)/bin/activate"
 
 ## Run the whole test suite (ruff and mypy included).
 test: $(VENV)/.installed
