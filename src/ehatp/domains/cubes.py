@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from ..model.domain import Domain, TaskRef, for_each, observable
+from ..model.domain import Domain, TaskRef, domain_factory, for_each, observable
 from ..model.formula import TRUE, Formula, Var, eq, exists, forall
 
 R, H = "R", "H"
@@ -32,6 +32,7 @@ MT, OT = "mt", "ot"
 HUMAN_REACH = ("fetched", "any")
 
 
+@domain_factory
 def make_domain(turn_before_move: bool = False,
                 human_reach: Literal["fetched", "any"] = "fetched") -> Domain:
     """The cube domain; see the module docstring for the two options."""
