@@ -95,6 +95,35 @@ def test_unreadable_problem_file_is_one_line(tmp_path: Path, kind: str) -> None:
     assert str(f) in one_line(invoke("solve", f))
 
 
+@pytest.mark.parametrize(("old", "new", "expect"), [
+    ('name = "P2"', "name = 3", "[problem] name: expected a string"),
+    ('starts = "human"', 'starts = ["human"]', "[problem] starts: expected a string"),
+    ("K = 2", "K = 2\nafter = [5]", "[problem] after: expected a list of strings"),
+    ('description = "', 'description = 7  # "', "[problem] description: expected a string"),
+    ('name = "cubes"', "name = 3", "[domain] name: expected a string"),
+    ('cube = ["r", "w"]', 'cube = "r"', "[objects] cube: expected a list of strings"),
+    ('robot = ["organize"]', "robot = 5", "[agenda] robot: expected a list of strings"),
+    ("[problem]", "beliefs = 5\n[problem]", "beliefs must be a table"),
+    ("[agenda]", "[beliefs]\nworld = [1]\n[agenda]", "a world must be a table"),
+    ("[agenda]", "[costs]\nactions = 5\n[agenda]", "actions must be a table"),
+    ("[agenda]", "[limits]\ntimeout = inf\n[agenda]", "expected a finite number"),
+    ("[agenda]", "[limits]\nmax_states = 1.5\n[agenda]", "expected a whole number > 0"),
+    ("[agenda]", "[human]\npasses = 5\n[agenda]", "[human] passes: unknown value 5"),
+    ("[agenda]", "[objective]\nties = 5\n[agenda]", "[objective] ties: bad tie-breaks"),
+    ("[agenda]", "[init.x]\ny = 1\n[agenda]", "[init] x: unknown key 'x'"),
+    ("[agenda]", "a = " + "[" * 3000 + "]" * 3000 + "\n[agenda]", "nested too deeply"),
+])
+def test_wrong_types_in_any_table_are_one_line(tmp_path: Path, old: str, new: str,
+                                               expect: str) -> None:
+    assert expect in one_line(invoke("solve", variant(tmp_path, old, new)))
+
+
+def test_a_binary_script_is_one_line(tmp_path: Path) -> None:
+    f = tmp_path / "moves.txt"
+    f.write_bytes(b"\xff\xfe move")
+    assert "not a UTF-8 text file" in one_line(invoke("simulate", P1, "--script", f))
+
+
 # --- 2. a domain module that raises ----------------------------------------------------------
 
 

@@ -336,6 +336,9 @@ def load(path: str | Path) -> Problem:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise InputError(str(path), "", f"not valid TOML: {e}", "fix the TOML syntax") from None
+    except RecursionError:  # the parser recurses per nesting level
+        raise InputError(str(path), "", "arrays or tables are nested too deeply",
+                         "flatten the file (a problem needs two levels at most)") from None
     for k in data:
         if k not in _TOP_KEYS:
             wrong = r.misplaced("", k)

@@ -64,7 +64,7 @@ def read_policy(path: Path | str, *, counts: bool = True) -> Policy:
     wrong display or a crash. (``validate`` leaves the counts to the validator.)"""
     try:
         policy = Policy.load(path)
-    except (AttributeError, TypeError, KeyError, ValueError, IndexError) as e:
+    except (AttributeError, TypeError, KeyError, ValueError, IndexError, RecursionError) as e:
         # the format reader trusts the JSON's shapes; anything it trips on is the file's fault
         place, what = _shape(path) or ("", f"malformed policy ({type(e).__name__}: {e})")
         raise InputError(str(path), place, what, POLICY_FIX) from None
@@ -76,7 +76,7 @@ def _shape(path: Path | str) -> tuple[str, str] | None:
     """Where a policy's JSON has the wrong shape for its reader, in the file's own terms."""
     try:
         raw = json.loads(Path(path).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+    except (OSError, ValueError, RecursionError):
         return None
     nodes = raw.get("nodes") if isinstance(raw, dict) else None
     if not isinstance(nodes, list):

@@ -49,6 +49,9 @@ def read_script(path: Path, robot: str, human: str) -> list[ScriptLine]:
     except OSError as e:
         raise InputError(str(path), "", f"cannot read the script ({e.strerror})",
                          "check the path given to --script") from None
+    except UnicodeDecodeError as e:
+        raise InputError(str(path), "", f"not a UTF-8 text file (byte at offset {e.start})",
+                         "give a script of moves, one per line, saved as UTF-8") from None
     out = []
     for i, raw in enumerate(text.splitlines(), 1):
         line = raw.split("#", 1)[0].strip()
