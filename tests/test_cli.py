@@ -153,13 +153,16 @@ def test_bad_problem_is_one_line_exit_2(case: str, tmp_path: Path) -> None:
         f.write_text("[problem\nname = 1\n", encoding="utf-8")
     else:
         (tmp_path / "mydomain.py").write_text(
-            "from ehatp import DomainError\n\n\ndef make():\n"
+            "from ehatp import DomainError\nfrom ehatp.model.domain import domain_factory\n\n\n"
+            "@domain_factory\ndef make(**options):\n"
             "    raise DomainError('predicate on declared twice')\n", encoding="utf-8")
         f = variant(tmp_path, "dom.toml", 'name = "cubes"\nturn_before_move = false',
                     'name = "mydomain.py:make"')
     r = cli("solve", f, "--out", tmp_path / "x.json")
     _one_line(r, f.name)
     assert not (tmp_path / "x.json").exists()
+    if case == "domain error":  # the factory ran and its error names the line
+        assert "is malformed at" in r.stderr and "mydomain.py:7" in r.stderr
 
 
 @pytest.mark.parametrize("content", ["[1, 2]", '{"a": ', '{"format": "something-else"}',
