@@ -5,10 +5,14 @@ every move costs 1, as in the paper's Algorithm 1), with duplicate detection. A 
 when it is a goal, a robot node with a solved child, or a human node whose children are all
 solved; solved labels propagate upwards as they appear (the paper's propagate step).
 
-Stopping rule: once the root is solved, worst-case values are computed on the explored graph
-(:mod:`.values`). If the root's value V is at most the ``g`` of every node expanded so far,
-the policy is optimal: a cheaper policy only visits nodes with ``g`` below V, all of which are
-expanded. The result does not depend on exploration order (values are a least fixpoint).
+Stopping rule (docs/semantics.md §7, "Search"): for the worst-case objective, once the root is
+solved, worst-case values are computed on the explored graph (:mod:`.values`). If the root's
+value V is at most the ``g`` of every node expanded so far, the policy is optimal: a cheaper
+policy only visits nodes with ``g`` below V, all of which are expanded. The result does not
+depend on exploration order (values are a least fixpoint). Expected cost has no such bound (a
+cheap mean may hide a long rare branch), so for it the whole reachable graph is explored before
+the values are computed. Time and state limits stop either search; the best policy found so far
+is then returned, not proven optimal.
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ from ..epistemic.semantics import DEAD_PASSIVE_RUN, Move, Semantics
 from ..epistemic.state import ROBOT, EState
 from ..errors import InputError
 from ..model.grounding import Grounded
+from ..model.options import ObjectiveKind
 from ..model.problem import Cost
 from .values import Values, compute_values
 
@@ -99,6 +104,8 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
     timeout = limits.timeout if timeout is None else timeout
     max_states = limits.max_states if max_states is None else max_states
     max_depth = limits.max_depth if max_depth is None else max_depth
+    # worst case: stop as soon as the optimum is proven; expected cost: explore everything
+    early_stop = grounded.problem.objective.kind == ObjectiveKind.WORST_CASE
     sem = Semantics(grounded)
     gr = Graph(sem)
     stats = Stats()
@@ -124,7 +131,7 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
             continue
         if g > level:
             # every node with g <= level is expanded: the optimum may be proven now
-            if gr.solved[root]:
+            if early_stop and gr.solved[root]:
                 values = compute_values(gr, root)
                 if values.value[root] <= level:
                     status, optimal = "solved", True
@@ -144,8 +151,8 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
         _expand(gr, n, heap, stats, max_depth)
     else:
         if gr.solved[root]:
-            status, optimal = "solved", True
             values = compute_values(gr, root)
+            status, optimal = "solved", values.exact
     if status in ("timeout", "state-limit") and gr.solved[root]:
         values = compute_values(gr, root)  # best policy found so far, not proven optimal
     stats.time_s = time.perf_counter() - start

@@ -28,7 +28,8 @@ class Result:
 
 def solve(problem: Problem, *, timeout: float | None = None, max_states: int | None = None,
           max_depth: int | None = None, progress: Progress | None = None) -> Result:
-    """Plan a worst-case-optimal robot policy for ``problem``.
+    """Plan a robot policy for ``problem``, optimal under ``problem.objective``
+    (docs/semantics.md §7: worst-case by default, or expected cost).
 
     Limits default to the problem's ``[limits]``. When a limit stops the search the result
     carries partial statistics, and the best policy found so far if there is one
@@ -45,7 +46,8 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
         policy = extract(out.graph, out.root, out.values, problem_name=problem.name,
                          optimal=out.optimal, stats=public)
         stats.update(cost=policy.cost, communications=policy.communications,
-                     leaves=policy.leaves)
+                     leaves=policy.leaves, worst_case=policy.worst_case,
+                     expected=policy.expected)
     reason = ""
     if out.status == "unsolvable":
         # name the goal literals or agendas that fail everywhere; a line of play that dies
@@ -57,4 +59,7 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
         reason = f"time limit reached after {out.stats.time_s:.1f} s"
     elif out.status == "state-limit":
         reason = f"state limit reached ({out.stats.distinct} distinct states)"
+    elif not out.optimal:  # §7: expected cost on a solvable graph with cycles
+        reason = ("not proven optimal: the solvable graph has cycles, so choices inside them "
+                  "were restricted to those of the worst-case pass")
     return Result(out.status, policy, stats, reason, out.optimal)

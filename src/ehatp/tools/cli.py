@@ -8,6 +8,7 @@ never a traceback; an internal error is one line naming the file that holds the 
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sys
 import time
@@ -20,6 +21,7 @@ from rich.live import Live
 from rich.text import Text
 
 from .. import __version__
+from ..model.options import ObjectiveKind
 from ..model.problem import Problem, load
 from ..policy_format import Policy
 from ..search.andor import Stats
@@ -34,7 +36,7 @@ from .common import (
     read_policy,
     user_errors,
 )
-from .show import fmt_cost, plain, policy_lines, print_rich
+from .show import cost_lines, plain, policy_lines, print_notes, print_rich
 
 app = typer.Typer(
     name="ehatp",
@@ -139,6 +141,14 @@ def _root(
 # --- solve -----------------------------------------------------------------------------------
 
 
+def with_objective(prob: Problem, kind: ObjectiveKind | None) -> Problem:
+    """Print the problem's notes; ``--objective`` overrides its ``[objective] kind``."""
+    print_notes(prob)
+    if kind is None:
+        return prob
+    return dataclasses.replace(prob, objective=dataclasses.replace(prob.objective, kind=kind))
+
+
 @app.command("solve")
 def solve_cmd(
     problem: Annotated[Path, typer.Argument(
@@ -159,15 +169,20 @@ def solve_cmd(
         "--max-depth", min=1, help="Treat states deeper than this as dead ends (default: the "
                                    "problem's limits.max_depth).",
         show_default=False)] = None,
+    objective: Annotated[ObjectiveKind | None, typer.Option(
+        "--objective", help="What to minimise: the worst case over the human's choices or the "
+                            "expected cost (default: the problem's [objective] kind, else "
+                            "worst-case).", show_default=False)] = None,
 ) -> None:
-    """Plan a worst-case-optimal robot policy and write it as JSON.
+    """Plan a robot policy, optimal under the problem's objective, and write it as JSON.
 
     Prints a summary: solved or why not, states generated/distinct, the largest number of
-    worlds the human entertains (|W|), leaves, worst-case cost, communications and time.
+    worlds the human entertains (|W|), leaves, the policy's worst-case and expected cost (and
+    which one was minimised), communications and time.
     Exit 0 solved; 1 no policy exists or a limit stopped the search (the best policy found so
     far is still written, marked not optimal); 2 bad input.
     """
-    prob = load_problem(problem)
+    prob = with_objective(load_problem(problem), objective)
     console = stderr_console()
     live = LiveProgress(console, prob.name) if console is not None else None
     t0 = time.perf_counter()
@@ -193,8 +208,10 @@ def solve_cmd(
 
 def _summary(prob: Problem, result: Result, wall_ms: float, written: Path | None) -> None:
     st = result.stats
-    if result.status == "solved":
+    if result.status == "solved" and result.optimal:
         typer.secho(f"{prob.name}: solved (optimal policy found)", fg="green", bold=True)
+    elif result.status == "solved":
+        typer.secho(f"{prob.name}: solved, {result.reason}", fg="yellow", bold=True)
     elif result.status == "unsolvable":
         typer.secho(f"{prob.name}: {result.reason}", fg="red", bold=True)
     else:
@@ -207,11 +224,12 @@ def _summary(prob: Problem, result: Result, wall_ms: float, written: Path | None
     ]
     pol = result.policy
     if pol is not None:
-        rows += [("leaves", pol.leaves), ("cost", f"{fmt_cost(pol.cost)} (worst case)"),
+        rows += [("leaves", pol.leaves), *cost_lines(pol),
                  ("communications", pol.communications)]
     rows.append(("time", f"{st.get('time_ms', 0):,} ms search, {wall_ms:,.1f} ms in all"))
     if written is not None:
-        note = "" if result.status == "solved" else " (best found so far, NOT proven optimal)"
+        note = ("" if result.optimal else " (NOT proven optimal)" if result.status == "solved"
+                else " (best found so far, NOT proven optimal)")
         rows.append(("policy", f"written to {written}{note}"))
     elif result.status != "unsolvable":
         rows.append(("policy", "none found before the search stopped"))
@@ -264,6 +282,9 @@ def validate_cmd(
     policy: Annotated[Path, typer.Argument(
         help="Policy JSON to check against the problem.", metavar="POLICY.json",
         show_default=False)],
+    objective: Annotated[ObjectiveKind | None, typer.Option(
+        "--objective", help="The objective the policy was planned for, if `solve --objective` "
+                            "overrode the problem's.", show_default=False)] = None,
 ) -> None:
     """Check a policy against a problem with the independent validator.
 
@@ -272,7 +293,7 @@ def validate_cmd(
     """
     import ehatp  # the package-level validate(), so the validator loads only when needed
 
-    prob = load_problem(problem)
+    prob = with_objective(load_problem(problem), objective)  # as `solve --objective` planned
     pol = load_policy(policy, counts=False)  # whether counts match is the validator's call
     if pol.problem != prob.name:  # legal to check, but most likely the wrong pair of files
         typer.echo(f"note: {policy} was planned for {pol.problem!r}, not {prob.name!r}",

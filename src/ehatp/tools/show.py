@@ -11,9 +11,11 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
 
+import typer
 from rich.console import Console
 from rich.text import Text
 
+from ..model.problem import Problem
 from ..policy_format import Policy, PolicyNode, timeline
 
 COMM_KINDS = ("inform", "ask")
@@ -37,6 +39,31 @@ def fmt_cost(c: Any) -> str:
     if isinstance(c, float):
         return str(int(c)) if c.is_integer() else f"{c:g}"
     return str(c)
+
+
+def fmt_exact(c: Any) -> str:
+    """A cost for people: ``8.75 (35/4)`` when it is a fraction, else as :func:`fmt_cost`."""
+    if isinstance(c, Fraction) and c.denominator != 1:
+        return f"{float(c):g} ({c})"
+    return fmt_cost(c)
+
+
+def cost_lines(policy: Policy) -> list[tuple[str, str]]:
+    """The policy's worst-case and expected cost (docs/semantics.md §7), marking the one its
+    objective minimised; a file without them only has its ``cost``."""
+    kind = policy.objective.get("kind", "worst-case")
+    mark = " (optimised)"
+    if policy.worst_case is None or policy.expected is None:
+        return [("cost", f"{fmt_exact(policy.cost)} ({kind.replace('-', ' ')}){mark}")]
+    return [("worst case", fmt_exact(policy.worst_case) + (mark if kind == "worst-case" else "")),
+            ("expected cost", fmt_exact(policy.expected) + (mark if kind == "expected" else ""))]
+
+
+def print_notes(problem: Problem) -> None:
+    """The problem's notes (deprecated spellings and the like), one ``note:`` line each on
+    stderr."""
+    for note in problem.notes:
+        typer.echo(f"note: {note}", err=True)
 
 
 def _role(policy: Policy, agent: str | None) -> str:
@@ -76,8 +103,9 @@ def header(policy: Policy) -> list[Line]:
     lines = [
         Line((), [(f"Policy for {policy.problem}", "bold"),
                   (f"  (domain {policy.domain}, K={policy.K}; robot {r}, human {h})", "")]),
-        Line((), [(f"worst-case cost {fmt_cost(policy.cost)}, {policy.leaves} leaves, "
-                   f"{policy.communications} communications, {opt}",
+        Line((), [(", ".join(f"{k.replace('worst case', 'worst-case cost')} {v}"
+                             for k, v in cost_lines(policy))
+                   + f", {policy.leaves} leaves, {policy.communications} communications, {opt}",
                    "" if policy.optimal else "bold red")]),
     ]
     st = policy.stats
@@ -180,5 +208,5 @@ def print_rich(lines: Sequence[Line], console: Console) -> None:
         console.print(text, soft_wrap=True, highlight=False)
 
 
-__all__ = ["Line", "fmt_cost", "header", "plain", "policy_lines", "print_rich",
-           "timeline_lines", "tree_lines"]
+__all__ = ["Line", "cost_lines", "fmt_cost", "fmt_exact", "header", "plain", "policy_lines",
+           "print_notes", "print_rich", "timeline_lines", "tree_lines"]

@@ -23,6 +23,7 @@ from ..errors import InputError
 from ..model.problem import Cost, Problem, load
 from .common import read_policy, user_errors
 from .executor import ExecutionError, Executor, PolicyMismatch, UncoveredHumanAction
+from .show import print_notes
 
 MODES = ("ask", "random", "first", "script")
 
@@ -224,6 +225,7 @@ def run(problem_path: Path, *, policy_path: Path | None = None, human: str = "fi
         raise InputError("--script", "", f"a script is only read with --human script, "
                          f"not {human}", "drop --script or use --human script")
     problem: Problem = load(problem_path)
+    print_notes(problem)
     policy = read_policy(policy_path) if policy_path is not None else None
     try:
         ex = Executor(problem, policy)
