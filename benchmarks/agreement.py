@@ -6,8 +6,9 @@
 Solves the random problems of seeds start..start+n-1 (``ehatp.tools.randomgen``), validates
 every policy the planner returns with the independent validator, and on one seed in ten solves
 again (and declared in reverse order), expecting byte-identical policy JSON. A search stopped by
-its limits is counted apart (skipped). Prints every crash and disagreement with its seed, then
-the counts and the time taken; exits 1 if there is any crash, disagreement or nondeterminism.
+its limits is counted apart (skipped). Prints every crash and disagreement with its seed (and,
+in braces, the model options its problem sets away from the defaults), then the counts and the
+time taken; exits 1 if there is any crash, disagreement or nondeterminism.
 """
 
 from __future__ import annotations
@@ -67,18 +68,21 @@ def main(argv: list[str] | None = None) -> int:
     for o in outcomes:
         if args.verbose or o.failed:
             det = " [determinism checked]" if o.checked_determinism else ""
+            opts = f" {{{', '.join(o.options)}}}" if o.options else ""
             print(f"seed {o.seed}: {o.kind} (planner: {o.status or '-'}, "
-                  f"{o.seconds * 1000:.0f} ms){det}{': ' + o.detail if o.detail else ''}")
+                  f"{o.seconds * 1000:.0f} ms){opts}{det}{': ' + o.detail if o.detail else ''}")
     c = randomgen.summary(outcomes)
     checked = sum(o.checked_determinism for o in outcomes)
     failures = sum(c[k] for k in randomgen.FAILURES)
+    plain = sum(1 for o in outcomes if o.failed and not o.options)
     print(f"{args.n} problems (seeds {seeds.start}..{seeds.stop - 1}) in {elapsed:.1f} s "
           f"on {args.jobs} job(s); determinism checked on {checked}")
     print(f"solved {c['solved']}, unsolvable {c['unsolvable']}, limit {c['limit']}, "
           f"crashes {c['crash']}, disagreements {c['disagreement']}, "
           f"nondeterministic {c['nondeterministic']}")
     print("OK: planner and validator agree" if not failures else
-          f"FAIL: {failures} seed(s) with a crash, disagreement or nondeterminism")
+          f"FAIL: {failures} seed(s) with a crash, disagreement or nondeterminism "
+          f"({plain} with every model option at its default)")
     return 1 if failures else 0
 
 

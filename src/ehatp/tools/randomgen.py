@@ -34,8 +34,13 @@ What a spec draws (probabilities are per problem unless said otherwise):
   probability 0.25 (empty, shortened, or different).
 - **Goal literals** (0.3), an action cost override (0.15), and the problem's settings
   (:data:`SETTINGS`): who starts (even), K in 0..4 (weights 1, 3, 3, 2, 1), the costs of
-  inform (1-5 or 1.5), ask (1-5), wait (1, 2 or 0.5) and pass (1 or 2), whether a blocked
-  human passes silently (0.75), the largest informing set (3, or 2 or 1 at 1/6 each).
+  inform (1-5 or 1.5), ask (1-5), wait (1, 2 or 0.5) and pass (1 or 2). On a share
+  :data:`PLAIN` (0.4) of the seeds every model option keeps its default; elsewhere each is
+  drawn: a blocked human passes silently (0.75), the largest informing set (3, else 2 or 1),
+  and away from the default with probability 0.1 each: the prototype pass rule, a
+  non-anticipating human, inform anywhere, speech with action, relevance "plan", no asking,
+  the expected objective (with ``pass`` weighted 1/2 one time in ten) and other tie-breaks
+  (0.2).
 
 Settings are drawn in one place, :data:`SETTINGS`, a dict from ``"table.field"`` to a sampler;
 each is drawn from its own generator (seeded by the seed and the key), so adding a setting
@@ -53,6 +58,7 @@ import time
 import traceback
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field, replace
+from fractions import Fraction
 from typing import Any
 
 from ..model.domain import (
@@ -66,7 +72,17 @@ from ..model.domain import (
     when,
 )
 from ..model.formula import TRUE, Atom, Formula, Var, conj
-from ..model.options import Communication, HumanModel, Objective
+from ..model.options import (
+    DEFAULT_TIES,
+    Communication,
+    HumanModel,
+    InformWhere,
+    Objective,
+    ObjectiveKind,
+    Passes,
+    Relevance,
+    Speech,
+)
 from ..model.problem import BeliefWorld, Costs, Problem
 
 ITEMS = ("x", "y")
@@ -91,24 +107,45 @@ SETTINGS: dict[str, Sampler] = {
     "costs.wait": _weighted([(1, 6), (2, 1), (0.5, 1)]),
     "costs.pass_": _weighted([(1, 6), (2, 1)]),
     "human.passes_when_blocked": _weighted([(True, 3), (False, 1)]),
+    "human.passes": _weighted([(Passes.FAIR, 9), (Passes.PROTOTYPE, 1)]),
+    "human.anticipates": _weighted([(True, 9), (False, 1)]),
     "communication.inform_max_atoms": _weighted([(3, 4), (2, 1), (1, 1)]),
+    "communication.inform": _weighted([(InformWhere.COPRESENT, 9), (InformWhere.ANYWHERE, 1)]),
+    "communication.speech": _weighted([(Speech.TURN, 9), (Speech.WITH_ACTION, 1)]),
+    "communication.relevance": _weighted([(Relevance.NEXT, 9), (Relevance.PLAN, 1)]),
+    "communication.ask": _weighted([(True, 9), (False, 1)]),
+    "objective.kind": _weighted([(ObjectiveKind.WORST_CASE, 9), (ObjectiveKind.EXPECTED, 1)]),
+    "objective.weights": _weighted([({}, 9), ({"pass": Fraction(1, 2)}, 1)]),
+    "objective.ties": _weighted([(DEFAULT_TIES, 8), (("waits", "communications", "length"), 1),
+                                 (("length",), 1)]),
 }
 """``"table.field"`` -> sampler. Add a problem setting with one line here (and, for a new
 table, one line in :data:`TABLES`); a field not drawn keeps its default."""
 
-TABLES: dict[str, Callable[[dict[str, Any]], dict[str, Any]]] = {
-    "problem": lambda kw: kw,
-    "costs": lambda kw: {"costs": Costs(**kw)},
-    "human": lambda kw: {"human": HumanModel(**kw)},
-    "communication": lambda kw: {"communication": Communication(**kw)},
-    "objective": lambda kw: {"objective": Objective(**kw)},
+TABLES: dict[str, type | None] = {
+    "problem": None,  # fields of Problem itself
+    "costs": Costs,
+    "human": HumanModel,
+    "communication": Communication,
+    "objective": Objective,
 }
-"""How the drawn fields of a table become keyword arguments of :class:`Problem`."""
+"""Each table of :data:`SETTINGS`: the dataclass its fields build, given to :class:`Problem`
+under the table's name (None: the fields are :class:`Problem`'s own)."""
+OPTION_TABLES = ("human", "communication", "objective")
+"""The tables that choose a model (docs/semantics.md); :meth:`Spec.options` lists what they
+set away from the defaults."""
+
+
+PLAIN = 0.4
+"""The share of problems whose model options (:data:`OPTION_TABLES`) all keep their defaults."""
 
 
 def draw_settings(seed: int) -> tuple[tuple[str, object], ...]:
-    """Every setting of :data:`SETTINGS`, each from its own generator."""
-    return tuple((key, SETTINGS[key](random.Random(f"{seed}:{key}"))) for key in sorted(SETTINGS))
+    """The settings of :data:`SETTINGS`, each from its own generator; on a share
+    :data:`PLAIN` of the seeds, those of :data:`OPTION_TABLES` are left at their defaults."""
+    plain = random.Random(f"{seed}:plain").random() < PLAIN
+    return tuple((key, SETTINGS[key](random.Random(f"{seed}:{key}"))) for key in sorted(SETTINGS)
+                 if not (plain and key.partition(".")[0] in OPTION_TABLES))
 
 
 # --- the spec: plain data ---------------------------------------------------------------------
@@ -189,6 +226,17 @@ class Spec:
     def setting(self, key: str) -> object:
         return dict(self.settings)[key]
 
+    def options(self) -> tuple[str, ...]:
+        """The model options (:data:`OPTION_TABLES`) drawn away from their defaults, as
+        ``table.field=value``: what to suspect first when a seed fails."""
+        out = []
+        for key, value in self.settings:
+            table, _, name = key.partition(".")
+            cls = TABLES[table]
+            if table in OPTION_TABLES and cls is not None and value != getattr(cls(), name):
+                out.append(f"{key}={_show(value)}")
+        return tuple(out)
+
     def describe(self) -> str:
         """The spec, readable: what to look at when a seed fails."""
         def lits(ls: Iterable[Lit] | None) -> str:
@@ -225,8 +273,18 @@ class Spec:
                     for i, w in enumerate(self.worlds)),
                   f"agendas: robot {list(self.robot_agenda)}, human {list(self.human_agenda)}",
                   f"goal: {lits(self.goal)}", f"action costs: {dict(self.action_costs)}",
-                  "settings: " + ", ".join(f"{k}={v}" for k, v in self.settings)]
+                  "settings: " + ", ".join(f"{k}={_show(v)}" for k, v in self.settings)]
         return "\n".join(lines)
+
+
+def _show(v: object) -> str:
+    if isinstance(v, str):  # a StrEnum prints its value
+        return str(v)
+    if isinstance(v, tuple):
+        return "[" + ", ".join(map(_show, v)) + "]"
+    if isinstance(v, dict):
+        return "{" + ", ".join(f"{k}: {_show(x)}" for k, x in v.items()) + "}"
+    return str(v)
 
 
 # --- drawing ----------------------------------------------------------------------------------
@@ -699,7 +757,8 @@ def build(spec: Spec, *, reverse: bool = False) -> Problem:
     tables.setdefault("costs", {})["actions"] = dict(spec.action_costs)
     kwargs: dict[str, Any] = {}
     for table, fields in tables.items():
-        kwargs.update(TABLES[table](fields))
+        cls = TABLES[table]
+        kwargs.update(fields if cls is None else {table: cls(**fields)})
     return Problem(
         name=f"random-{spec.seed}", domain=d, objects={"item": order(ITEMS)},
         init=frozenset(call(a) for a in init), robot_agenda=tuple(map(call, spec.robot_agenda)),
@@ -725,7 +784,8 @@ class Outcome:
     a limit: skipped) | crash (an exception) | disagreement (the validator rejects the
     planner's policy) | nondeterministic (a second solve, or the problem declared in reverse
     order, gives another policy). ``status`` is the planner's; ``detail`` the first line of the
-    validator's report or the exception, where it was raised."""
+    validator's report or the exception, where it was raised; ``options`` the model options
+    the problem sets away from their defaults (:meth:`Spec.options`)."""
 
     seed: int
     kind: str
@@ -733,6 +793,7 @@ class Outcome:
     detail: str = ""
     checked_determinism: bool = False
     seconds: float = 0.0
+    options: tuple[str, ...] = ()  # the model options away from their defaults
 
     @property
     def failed(self) -> bool:
@@ -764,12 +825,15 @@ def check(seed: int, *, determinism: bool | None = None, max_states: int = MAX_S
     start = time.perf_counter()
     stage = "draw"
     status = ""
+    options: tuple[str, ...] = ()
 
     def out(kind: str, detail: str = "", checked: bool = False) -> Outcome:
-        return Outcome(seed, kind, status, detail, checked, time.perf_counter() - start)
+        return Outcome(seed, kind, status, detail, checked, time.perf_counter() - start,
+                       options)
 
     try:
         spec = draw(seed)
+        options = spec.options()
         stage = "build"
         prob = build(spec)
         stage = "solve"
