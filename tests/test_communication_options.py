@@ -16,9 +16,9 @@ from .scenarios import lab_domain, problem, walk
 EX = Path(__file__).resolve().parents[1] / "examples" / "communication"
 
 CASES = [
-    ("starts-on-false-belief.toml", "speech", "inform(jar_on(k2), not jar_on(k1))"),
-    ("other-room.toml", "inform", "inform(jar_on(p2), not jar_on(p1))"),
-    ("late-fatal.toml", "relevance", "inform(jar_on(p2), not jar_on(p1))"),
+    ("starts-on-false-belief.toml", "speech", "inform(not jar_on(k1), jar_on(k2))"),
+    ("other-room.toml", "inform", "inform(not jar_on(p1), jar_on(p2))"),
+    ("late-fatal.toml", "relevance", "inform(not jar_on(p1), jar_on(p2))"),
 ]
 
 

@@ -98,7 +98,7 @@ def test_the_objectives_pick_different_robot_actions_with_values_by_hand() -> No
     assert [n.value for n in ex.nodes if n.to_move == "H"] == [Fraction(17, 3), 5]
     assert [n.value for n in wc.nodes if n.to_move == "H"] == [8, 6]
     assert ex.objective == {"kind": "expected", "weights": {},
-                            "ties": ["communications", "passes", "length"]}
+                            "ties": ["communications", "waits", "length"]}
     assert wc.objective["kind"] == "worst-case"
 
 
@@ -127,7 +127,7 @@ def test_the_worst_case_tie_key_reorders_an_expected_choice() -> None:
     default = Objective(EXPECTED)
     _, pol = solved(gamble((1, 9), (4, 6), default))
     assert robot_first(pol) == "a" and (pol.expected, pol.worst_case) == (Fraction(20, 3), 12)
-    careful = Objective(EXPECTED, ties=("worst-case", "communications", "passes", "length"))
+    careful = Objective(EXPECTED, ties=("worst-case", "communications", "waits", "length"))
     _, pol = solved(gamble((1, 9), (4, 6), careful))
     assert robot_first(pol) == "b" and (pol.expected, pol.worst_case) == (Fraction(20, 3), 9)
     assert pol.objective["ties"] == list(careful.ties)

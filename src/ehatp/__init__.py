@@ -18,6 +18,7 @@ from .model.domain import (
     AgentModel,
     Domain,
     DomainError,
+    domain_factory,
     for_each,
     observable,
     when,
@@ -70,5 +71,5 @@ __all__ = [
     "FALSE", "HIDDEN", "INFERABLE", "TRUE", "AgentModel", "BeliefWorld", "Costs", "Domain",
     "DomainError", "EhatpError", "ExecutionError", "Executor", "InputError", "Limits",
     "Policy", "PolicyMismatch", "Problem", "Result", "UncoveredHumanAction", "Var", "eq", "exists",
-    "for_each", "forall", "load", "observable", "solve", "validate", "when",
+    "domain_factory", "for_each", "forall", "load", "observable", "solve", "validate", "when",
 ]

@@ -39,6 +39,8 @@ class Move:
     op: int = -1
     atoms: int = 0  # inform: the atoms told
     failure: str = ""
+    # a human pass made waiting: its agenda unfinished and no action it is sure of (§7 ties)
+    waits: bool = False
 
 
 class Call(NamedTuple):
@@ -316,10 +318,13 @@ class Semantics:
         full = (1 << len(states)) - 1
         acts: list[tuple[int, Agenda]] = []
         asks: dict[str, Formula] = {}
+        finished = False
         for u in self.H.refine_in_all(es.human_agenda, states):
             if u.worlds == full:
                 if u.op != FINISH:
                     acts.append((u.op, u.rest))
+                else:
+                    finished = True
             elif cop and u.conds and self.comm.ask:
                 phi = self.uncertain_part(conj(*u.conds), states)
                 asks.setdefault(self.show(phi), phi)
@@ -336,7 +341,8 @@ class Semantics:
             may_pass = not acts
         if may_pass:
             out.append(Move(HUMAN, PASS, "pass", self.costs.pass_,
-                            es._replace(turn=ROBOT, passive=es.passive + 1, forced=False)))
+                            es._replace(turn=ROBOT, passive=es.passive + 1, forced=False),
+                            waits=not acts and not finished))
         return out
 
     def human_exec(self, es: EState, op: GOp, rest: Agenda) -> Move:

@@ -59,8 +59,8 @@ OPTION_KEYS: dict[str, frozenset[str]] = {
                                 "plan_horizon"}),
     "objective": frozenset({"kind", "weights", "ties"}),
 }
-TIE_KEYS = ("communications", "passes", "length", "worst-case", "expected")
-DEFAULT_TIES = ("communications", "passes", "length")
+TIE_KEYS = ("communications", "waits", "length", "worst-case", "expected")
+DEFAULT_TIES = ("communications", "waits", "length")
 
 
 @dataclass(frozen=True)

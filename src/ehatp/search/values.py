@@ -15,9 +15,10 @@ value). See :func:`expected_order` for how cycles are handled.
 
 **Ties** (§7): among robot options of equal value, the keys of ``[objective] ties`` in order:
 ``communications`` (``inform``/``ask`` moves and moves that speak while acting, in the whole
-sub-policy), ``passes`` (human ``pass`` moves), ``length`` (the average branch length, decided
-choice by choice since the average is not decomposable), ``worst-case`` / ``expected`` (that
-value of the chosen sub-policy); a final tie goes to the first option in canonical order.
+sub-policy), ``waits`` (human ``pass`` moves made waiting: its agenda unfinished, no action it
+is sure of), ``length`` (the average branch length, decided choice by choice since the average
+is not decomposable), ``worst-case`` / ``expected`` (that value of the chosen sub-policy); a
+final tie goes to the first option in canonical order.
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
-from ..epistemic.semantics import ACTION, ASK, INFORM, PASS, WAIT, Move
+from ..epistemic.semantics import ACTION, ASK, INFORM, WAIT, Move
 from ..model.options import Objective, ObjectiveKind
 from ..model.problem import Cost
 
@@ -43,15 +44,15 @@ class Tally:
     """Totals over a sub-policy (the chosen options below a node, every human branch)."""
 
     comms: int
-    passes: int
+    waits: int  # human passes made waiting for the robot or for information
     leaves: int
     length: int  # sum over leaves of their distance (in moves) from this node
     worst: Cost  # the sub-policy's worst-case cost
     mean: Cost | None  # its expected cost (None when neither objective nor ties need it)
 
     def key(self) -> tuple[int, int, Fraction]:
-        """The default tie key: communications, passes, average branch length."""
-        return (self.comms, self.passes, Fraction(self.length, self.leaves))
+        """The default tie key: communications, waits, average branch length."""
+        return (self.comms, self.waits, Fraction(self.length, self.leaves))
 
 
 LEAF = Tally(0, 0, 1, 0, 0, 0)
@@ -280,7 +281,7 @@ def _choose(gr: Graph, order: list[int], allowed: Callable[[int, int], bool], ob
             if need_mean:
                 mean = weighted_mean([weight(e.move) for e in edges],
                                      [p.mean for p in parts if p.mean is not None])
-            tally[n] = Tally(sum(p.comms for p in parts), sum(p.passes for p in parts),
+            tally[n] = Tally(sum(p.comms for p in parts), sum(p.waits for p in parts),
                              sum(p.leaves for p in parts), sum(p.length for p in parts),
                              max(p.worst for p in parts), mean)
     return choice, tally
@@ -288,7 +289,7 @@ def _choose(gr: Graph, order: list[int], allowed: Callable[[int, int], bool], ob
 
 _TIE_KEYS: dict[str, Callable[[Tally], object]] = {
     "communications": lambda t: t.comms,
-    "passes": lambda t: t.passes,
+    "waits": lambda t: t.waits,
     "length": lambda t: Fraction(t.length, t.leaves),
     "worst-case": lambda t: t.worst,
     "expected": lambda t: t.mean,
@@ -308,6 +309,6 @@ def speaks(m: Move) -> bool:
 
 def _through(m: Move, t: Tally, need_mean: bool) -> Tally:
     """The child's tally seen from its parent, one move ``m`` further up."""
-    return Tally(t.comms + (1 if speaks(m) else 0), t.passes + (1 if m.kind == PASS else 0),
+    return Tally(t.comms + (1 if speaks(m) else 0), t.waits + (1 if m.waits else 0),
                  t.leaves, t.length + t.leaves, m.cost + t.worst,
                  m.cost + t.mean if need_mean and t.mean is not None else None)
