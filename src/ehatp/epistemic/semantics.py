@@ -55,6 +55,7 @@ class Call(NamedTuple):
 
 
 def bits_of(m: int) -> list[int]:
+    """The indices of the set bits of ``m``, lowest first (atoms of a mask, §2)."""
     out = []
     i = 0
     while m:
@@ -127,6 +128,9 @@ class Semantics:
 
     # -- basics ---------------------------------------------------------------------------
     def initial(self) -> EState:
+        """§3-§5: the root: the designated world, the belief worlds after situation assessment (with
+        the robot agendas the human can hold), and, under speech "with-action", the robot's speech
+        opening."""
         g = self.g
         turn = HUMAN if g.problem.starts == "human" else ROBOT
         worlds = self.assess(g.init, normalize((s, self.attributed(ag)) for s, ag in g.beliefs))
@@ -140,12 +144,14 @@ class Semantics:
         return es
 
     def copresent(self, t: int) -> bool:
+        """§2: the domain's co-presence formula in the true state ``t`` (memoised)."""
         c = self._cop.get(t)
         if c is None:
             c = self._cop[t] = self.g.copresent(t)
         return c
 
     def visible(self, t: int) -> int:
+        """§2: the mask of observable atoms whose visibility condition holds in ``t``."""
         v = self._vis.get(t)
         if v is None:
             v = self._vis[t] = self.g.visible_mask(t)
@@ -175,6 +181,7 @@ class Semantics:
         return normalize(ws)
 
     def robot_op(self, op: int) -> GOp:
+        """§4: the robot action as it really is (M_R)."""
         return self.g.robot.ops[op]
 
     def anticipated_op(self, op: int) -> GOp:
@@ -220,23 +227,28 @@ class Semantics:
 
     # -- goal -----------------------------------------------------------------------------
     def robot_done(self, es: EState) -> bool:
+        """§6: the robot's agenda can finish under T (M_R)."""
         return self.R.refine(es.robot_agenda, es.true)[:1] == ((FINISH, ()),)
 
     def human_done(self, es: EState) -> bool:
+        """§6: the human's agenda certainly finishes over W (done in every world)."""
         states = states_of(es.worlds)
         full = (1 << len(states)) - 1
         return any(u.op == FINISH and u.worlds == full
                    for u in self.H.refine_in_all(es.human_agenda, states))
 
     def human_believes_robot_done(self, es: EState) -> bool:
+        """§6: in every world the robot agenda the human attributes can finish (M_R^H)."""
         return all(self.RH.refine(ag, s)[:1] == ((FINISH, ()),) for s, ag in es.worlds)
 
     def is_goal(self, es: EState) -> bool:
+        """§6: goal formula in T, both agendas finished, and the human believes the robot done."""
         return (self.g.goal(es.true) and self.robot_done(es) and self.human_done(es)
                 and self.human_believes_robot_done(es))
 
     # -- moves ----------------------------------------------------------------------------
     def moves(self, es: EState) -> list[Move]:
+        """§4: the options of the agent to move (robot: OR choices; human: AND branches)."""
         return self.robot_moves(es) if es.turn == ROBOT else self.human_moves(es)
 
     def robot_moves(self, es: EState) -> list[Move]:
@@ -283,6 +295,8 @@ class Semantics:
         return out
 
     def robot_exec(self, es: EState, op: GOp, rest: Agenda, cop: bool) -> EState:
+        """§4: the robot does ``op``: witnessed (worlds that expected it advance, else revision) or
+        unseen (the product), then situation assessment."""
         t2 = op.apply(es.true)
         if cop:
             new: list[World] = []
@@ -313,6 +327,8 @@ class Semantics:
                            forced=forced)
 
     def human_moves(self, es: EState) -> list[Move]:
+        """§4: the human's options on W: certain actions, ``ask`` of uncertain ones (§5), and
+        ``pass`` under the fair or prototype rule."""
         cop = self.copresent(es.true)
         states = states_of(es.worlds)
         full = (1 << len(states)) - 1
@@ -346,6 +362,8 @@ class Semantics:
         return out
 
     def human_exec(self, es: EState, op: GOp, rest: Agenda) -> Move:
+        """§4: the human does ``op``: a failure when it does not hold in T (a false belief); else T
+        and every world advance, inferable atoms are learned, then situation assessment."""
         t = es.true
         if not op.pre(t):
             false = [self.g.atoms[i] for i in bits_of(self._unmet(op, t, es.worlds[0][0]))]
@@ -383,10 +401,13 @@ class Semantics:
         return conj(*keep) if keep else phi
 
     def show(self, f: Formula) -> str:
+        """§4: a formula as the domain wrote it (derived predicates by name), for ``ask`` labels."""
         parts = f.args if isinstance(f, And) else (f,)
         return " and ".join(self.g.display.get(p, str(p)) for p in parts)
 
     def ask(self, es: EState, phi: Formula) -> EState:
+        """§5: the robot answers ``ask(phi)`` truthfully: the worlds where ``phi`` differs from T
+        are dropped."""
         fn = self.g.compile(phi)
         v = fn(es.true)
         keep = tuple(w for w in es.worlds if fn(w[0]) == v)
@@ -404,13 +425,16 @@ class Semantics:
                            forced=False)
 
     def inform_label(self, t: int, mask: int) -> str:
+        """§5: ``inform(a, not b)``: the literals of ``mask`` as T has them."""
         return f"inform({', '.join(self.literals(t, mask))})"
 
     def human_view(self, agenda: Agenda, states: tuple[int, ...]) -> frozenset[tuple[int, bool]]:
+        """§5: the human's next options on ``states`` (action, certain?), for relevance."""
         full = (1 << len(states)) - 1
         return frozenset((u.op, u.worlds == full) for u in self.H.refine_in_all(agenda, states))
 
     def robot_view(self, worlds: Worlds) -> frozenset[int]:
+        """§5: the robot options the human anticipates over ``worlds`` (M_R^H), FINISH included."""
         return frozenset(op for s, ag in worlds for op, _ in self.RH.refine(ag, s))
 
     def plans(self, agenda: Agenda, s: int) -> frozenset[tuple[int, ...]]:
@@ -443,9 +467,10 @@ class Semantics:
         return any(self.plans(agenda, s) != want for s in states_of(worlds))
 
     def informing_set(self, es: EState) -> int:
-        """A smallest set of atoms (as a mask) whose correction makes the human's next options
-        and expectations of the robot, computed on W, equal those computed on the truth; 0 when
-        the divergence is irrelevant or cannot be fixed by telling atoms."""
+        """§5: a smallest set of atoms (as a mask) whose correction makes the human's next
+        options, its expectations of the robot (FINISH included) and, under relevance "plan",
+        its plans, computed on W, equal those computed on the truth; 0 when the divergence is
+        irrelevant or cannot be fixed by telling atoms."""
         key = (es.true, es.robot_agenda, es.human_agenda, es.worlds)
         r = self._inform.get(key)
         if r is None:

@@ -29,6 +29,9 @@ class Refiner:
         self._all: dict[tuple[Agenda, tuple[int, ...]], tuple[Uncertain, ...]] = {}
 
     def refine(self, agenda: Agenda, s: int) -> tuple[Option, ...]:
+        """§1 (Refinement): the (first primitive action, remaining agenda) pairs of ``agenda``
+        in the single state ``s``; ``(FINISH, ())`` when it can be completed. A task this model
+        does not know gives nothing (the agent is blocked on it)."""
         key = (agenda, s)
         r = self._one.get(key)
         if r is None:
@@ -67,8 +70,9 @@ class Refiner:
                 self._go(meth.subtasks + rest, s, out, depth + 1)
 
     def refine_in_all(self, agenda: Agenda, states: tuple[int, ...]) -> tuple[Uncertain, ...]:
-        """Refinements over ``states`` (sorted, distinct): each with the mask of worlds (bit i =
-        states[i]) in which it applies and the conditions that were uncertain on the way."""
+        """§1 (the human's perspective): refinements over ``states`` (sorted, distinct), each
+        with the mask of worlds (bit i = states[i]) in which it applies and the conditions that
+        were uncertain on the way."""
         key = (agenda, states)
         r = self._all.get(key)
         if r is None:
