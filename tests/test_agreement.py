@@ -11,19 +11,23 @@ import pytest
 
 from ehatp.tools import randomgen
 
-SEEDS = range(300)
+SEEDS = range(1000)
+# Where benchmarks/agreement.py found planner and validator disagreeing (the first seed of each
+# kind in 40,000, with this version of the generator): checked on every run until fixed.
+FOUND = (2189, 2593, 10015, 14732, 31044, 38051)
 
 
 def test_planner_and_validator_agree_on_random_problems() -> None:
-    outcomes = randomgen.run(SEEDS, jobs=min(2, os.cpu_count() or 1))
-    assert [o.seed for o in outcomes] == list(SEEDS)
-    bad = [f"seed {o.seed}: {o.kind} (planner: {o.status or '-'}): {o.detail}"
-           for o in outcomes if o.failed]
+    seeds = [*SEEDS, *FOUND]
+    outcomes = randomgen.run(seeds, jobs=min(2, os.cpu_count() or 1))
+    assert [o.seed for o in outcomes] == sorted(seeds)
+    bad = [f"seed {o.seed}: {o.kind} (planner: {o.status or '-'}) {{{', '.join(o.options)}}}: "
+           f"{o.detail}" for o in outcomes if o.failed]
     assert not bad, "\n".join(bad)
     counts = randomgen.summary(outcomes)
     # a generator whose problems all fail to solve would prove nothing
-    assert counts["solved"] >= len(SEEDS) // 3, counts
-    assert sum(o.checked_determinism for o in outcomes) >= len(SEEDS) // 20
+    assert counts["solved"] >= len(seeds) // 3, counts
+    assert sum(o.checked_determinism for o in outcomes) >= len(seeds) // 20
 
 
 def test_a_seed_is_the_same_problem_every_time() -> None:
@@ -77,3 +81,15 @@ def test_the_generator_draws_every_feature() -> None:
                "op done", "task done", "method pre", "free method"])
     missing = [w for w in want if seen[w] == 0]
     assert not missing, (missing, seen)
+
+
+def test_every_setting_varies_and_some_problems_keep_every_default() -> None:
+    values: dict[str, set[str]] = {k: set() for k in randomgen.SETTINGS}
+    plain = 0
+    for seed in SEEDS:
+        s = randomgen.draw(seed)
+        for k, v in s.settings:
+            values[k].add(repr(v))
+        plain += not s.options()
+    assert all(len(v) >= 2 for v in values.values()), values
+    assert len(SEEDS) // 4 <= plain <= 3 * len(SEEDS) // 4
