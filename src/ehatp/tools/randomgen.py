@@ -13,25 +13,32 @@ What a spec draws (probabilities are per problem unless said otherwise):
 - **Atoms.** ``home`` (the human is at home; always observable), 2-5 generic atoms ``a0..``,
   and with probability 0.5 two items ``x``, ``y`` with ``mark(i)`` (a robot puts a mark the
   human may take) and the static ``glass(i)``. Each generic atom's observability class is
-  drawn: observable always (0.15), only when together (0.3), when the human is home (0.1),
-  when the human is away (0.05), inferable (0.2), hidden (0.2); ``mark`` is visible when home
+  drawn: observable always (0.1), only when together (0.25), when the human is home (0.1),
+  when the human is away (0.05), inferable (0.2), hidden (0.3); ``mark`` is visible when home
   and the item is glass (0.4), together (0.2), inferable or hidden (0.2 each).
 - **Co-presence** is ``home`` (0.75) or ``home and aK`` (0.25: a door the agents may close).
+- **Conditions fitted to an intended run.** Preconditions, task done-conditions and goal
+  literals are drawn so that one interleaving of the two agendas goes through (see
+  ``_Drawer``); about half of the problems are solvable, and their solutions need what one
+  agent does for the other, seen or unseen.
 - **Operators.** 1-3 generic robot and human operators: 0-2 precondition literals, 1-2 effect
   literals, a conditional effect (0.15), a done-condition (0.15), cost 1-3 (mostly 1). The
   human also has ``leave``/``back``, and ``take(i)`` (0.5 with items); the robot ``put(i)``
   (0.6 with items).
 - **Tasks.** The robot's ``job`` (done-condition 0.35; 1-2 methods with a precondition 0.35,
   one with a free item parameter 0.25) and ``sub`` (0.5), ``fetch(i)`` (0.3 with ``put``); the
-  human's ``chore`` whose methods go on a trip (leave, up to two actions away, back, then
-  more) with probability 0.55 each. Agendas hold 1-3 tasks.
+  human's ``chore`` (1-3 methods, a second one sharing the first's first step 0.4) whose
+  methods go on a trip (leave, up to two actions away, back, then more) with probability 0.55
+  each; the human starts away (0.1), then its methods begin with ``back``. The robot's
+  agenda holds 1-3 tasks, the human's 1-2.
 - **M_R^H** is M_R itself (0.35), an equal copy (0.05), or M_R changed 1-3 times: an operator
   dropped (with the methods using it), an extra operator the robot does not have (used by an
   extra method), a method dropped or added, an operator's precondition or effects redrawn, a
   task dropped, a done-condition added or removed, or only the top task with a done-condition.
-- **Beliefs.** One true world (0.35), one world with 1-2 false beliefs (0.3), or 2-3 worlds
-  (uncertainty); each world flips 0-2 atoms and attributes another robot agenda with
-  probability 0.25 (empty, shortened, or different).
+- **Beliefs.** One true world (0.25), one world with 1-2 false beliefs (0.35), or 2-3 worlds
+  (uncertainty, 0.4); each world flips 0-2 atoms (favouring those the human's preconditions
+  read) and attributes another robot agenda with probability 0.25 (empty, shortened, or
+  different).
 - **Goal literals** (0.3), an action cost override (0.15), and the problem's settings
   (:data:`SETTINGS`): who starts (even), K in 0..4 (weights 1, 3, 3, 2, 1), the costs of
   inform (1-5 or 1.5), ask (1-5), wait (1, 2 or 0.5) and pass (1 or 2). On a share
@@ -57,7 +64,7 @@ import random
 import time
 import traceback
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from typing import Any
 
@@ -166,6 +173,8 @@ class OpSpec:
 
 @dataclass(frozen=True)
 class TaskSpec:
+    """An abstract task; ``param`` makes it take the item ``?i``."""
+
     name: str
     param: bool = False
     done: tuple[Lit, ...] | None = None
@@ -185,15 +194,14 @@ class MethodSpec:
 
 @dataclass(frozen=True)
 class ModelSpec:
+    """One HTN model: M_R, M_H or M_R^H."""
+
     ops: tuple[OpSpec, ...]
     tasks: tuple[TaskSpec, ...] = ()
     methods: tuple[MethodSpec, ...] = ()
 
     def op(self, name: str) -> OpSpec | None:
         return next((o for o in self.ops if o.name == name), None)
-
-    def names(self) -> set[str]:
-        return {o.name for o in self.ops} | {t.name for t in self.tasks}
 
 
 @dataclass(frozen=True)
@@ -206,6 +214,8 @@ class WorldSpec:
 
 @dataclass(frozen=True)
 class Spec:
+    """Everything one seed draws; :func:`build` makes it a :class:`Problem`."""
+
     seed: int
     atoms: tuple[tuple[str, str], ...]  # (atom, observability kind)
     items: bool
@@ -221,9 +231,10 @@ class Spec:
     human_agenda: tuple[str, ...]
     goal: tuple[Lit, ...]
     action_costs: tuple[tuple[str, int], ...]
-    settings: tuple[tuple[str, object], ...] = field(default=())
+    settings: tuple[tuple[str, object], ...]  # ("table.field", value), see SETTINGS
 
     def setting(self, key: str) -> object:
+        """A drawn setting (KeyError for an option left at its default)."""
         return dict(self.settings)[key]
 
     def options(self) -> tuple[str, ...]:
@@ -278,6 +289,7 @@ class Spec:
 
 
 def _show(v: object) -> str:
+    """A setting's value as a problem file would write it."""
     if isinstance(v, str):  # a StrEnum prints its value
         return str(v)
     if isinstance(v, tuple):
