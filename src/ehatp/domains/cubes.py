@@ -15,6 +15,11 @@ Options:
   turning away already breaks co-presence and sight; otherwise one ``move`` does both (K=2).
 - ``human_reach``: ``"fetched"`` (default, the paper's rule above) or ``"any"`` (the human may
   also pick and box the robot's cubes on ``mt``, this project's reach before issue 7).
+- ``waypoints`` (default 0; for longer trips in the scaling benchmark): the number of places
+  ``way1`` … ``wayN`` (tables on which nothing lies) on the way from ``mt`` to ``ot``; a trip
+  goes through them in order, one ``move`` per leg (``turn`` then ``move`` per leg with
+  ``turn_before_move``). A round trip then keeps the agents apart for ``2 * (N + 1)`` robot
+  turns (``4 * (N + 1)`` with ``turn_before_move``), the K it needs.
 
 Our modelling choices: the placement rule ``can_put`` and the goal are derived predicates
 (printed by name in asks); ``pick`` names only the cube (the table is where the cube lies).
@@ -34,17 +39,23 @@ HUMAN_REACH = ("fetched", "any")
 
 @domain_factory
 def make_domain(turn_before_move: bool = False,
-                human_reach: Literal["fetched", "any"] = "fetched") -> Domain:
-    """The cube domain; see the module docstring for the two options."""
+                human_reach: Literal["fetched", "any"] = "fetched",
+                waypoints: int = 0) -> Domain:
+    """The cube domain; see the module docstring for the three options."""
     if human_reach not in HUMAN_REACH:
         raise ValueError(f"human_reach must be one of {', '.join(map(repr, HUMAN_REACH))}, "
                          f"got {human_reach!r}")
+    if isinstance(waypoints, bool) or not isinstance(waypoints, int) or waypoints < 0:
+        raise ValueError(f"waypoints must be a whole number of places, 0 or more, "
+                         f"got {waypoints!r}")
     # the name tells the variant, so that a policy file says which model it was planned for
     suffix = ("-turn" if turn_before_move else "") + ("-reach-any" if human_reach == "any" else "")
+    suffix += f"-way{waypoints}" if waypoints else ""
     d = Domain("cubes" + suffix, robot=R, human=H, doc=__doc__ or "")
     Table, Box, Cube = d.type("table"), d.type("box"), d.type("cube")
     d.constant(MT, Table)
     d.constant(OT, Table)
+    route = [MT, *(d.constant(f"way{i}", Table) for i in range(1, waypoints + 1)), OT]
     a = Var("a", "agent")
     t, t0, t1, t2 = (Var(n, Table) for n in ("t", "t0", "t1", "t2"))
     b, b2 = Var("b", Box), Var("b2", Box)
@@ -107,7 +118,12 @@ def make_domain(turn_before_move: bool = False,
                          effects=[at(H, t2), facing(H, t2), ~at(H, t1), ~facing(H, t1)])
 
     def go(src: Var | str, dst: Var | str) -> list[TaskRef]:
-        return ([turn(src, dst)] if turn_before_move else []) + [move(src, dst)]
+        if not waypoints:
+            return ([turn(src, dst)] if turn_before_move else []) + [move(src, dst)]
+        # through the waypoints, in order; src and dst are then the two tables, by name
+        path = route if src == MT else route[::-1]
+        return [step for a, b in zip(path, path[1:], strict=False)
+                for step in ([turn(a, b)] if turn_before_move else []) + [move(a, b)]]
 
     h_org = hm.task("organize", done=goal())
     h_away = hm.task("put_away", c)
@@ -116,12 +132,21 @@ def make_domain(turn_before_move: bool = False,
               subtasks=[h_pick(c), h_away(c), h_org()])
     hm.method(h_org, "far", params=[c, t], pre=reach & on(c, t) & ~at(H, t) & handempty(H),
               subtasks=[fetch(c, t), h_away(c), h_org()])
-    hm.method(fetch, "go", params=[t0], pre=at(H, t0) & ~eq(t0, t),
-              subtasks=[*go(t0, t), h_pick(c)])
+    if not waypoints:
+        hm.method(fetch, "go", params=[t0], pre=at(H, t0) & ~eq(t0, t),
+                  subtasks=[*go(t0, t), h_pick(c)])
+    else:  # one method per direction: the route is spelt out by name
+        for src, dst in ((MT, OT), (OT, MT)):
+            hm.method(fetch, f"go_{dst}", pre=at(H, src) & eq(t, dst),
+                      subtasks=[*go(src, dst), h_pick(c)])
     hm.method(h_away, "box", params=[b], pre=holding(H, c) & at(H, MT) & can_put(c, b),
               subtasks=[h_place(c, b)])
-    hm.method(h_away, "carry", params=[t0], pre=holding(H, c) & at(H, t0) & ~eq(t0, MT),
-              subtasks=[*go(t0, MT), h_away(c)])
+    if not waypoints:
+        hm.method(h_away, "carry", params=[t0], pre=holding(H, c) & at(H, t0) & ~eq(t0, MT),
+                  subtasks=[*go(t0, MT), h_away(c)])
+    else:
+        hm.method(h_away, "carry", pre=holding(H, c) & at(H, OT),
+                  subtasks=[*go(OT, MT), h_away(c)])
     return d
 
 
