@@ -460,10 +460,10 @@ class _Semantics:
 
     # -- section 5: relevance of a divergence, the informing set -------------------------------
 
-    def human_view(self, agenda: Agenda, states: frozenset[int]) -> frozenset[tuple[int, Agenda,
-                                                                                      bool]]:
-        return frozenset((r.action, r.rest, r.states == states)
-                         for r in self.hrefine(agenda, states))
+    def human_view(self, agenda: Agenda, states: frozenset[int]) -> frozenset[tuple[int, bool]]:
+        """§5: the human's next actions on ``states``, each with whether it is certain (what
+        it would choose; the method behind an action is not part of it)."""
+        return frozenset((r.action, r.states == states) for r in self.hrefine(agenda, states))
 
     def plans(self, agenda: Agenda, s: int) -> frozenset[tuple[int, ...]]:
         """§5 (relevance "plan"): plans(S), the sequences of human actions refining ``agenda``

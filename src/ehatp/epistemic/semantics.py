@@ -390,13 +390,13 @@ class Semantics:
 
     # -- communication ------------------------------------------------------------------------
     def uncertain_part(self, phi: Formula, states: tuple[int, ...]) -> Formula:
-        """The conjuncts of ``phi`` whose value differs between the worlds: what the human
-        is actually unsure of."""
+        """§4: the conjuncts of ``phi`` whose value differs between the worlds, each once: what
+        the human is actually unsure of."""
         parts = phi.args if isinstance(phi, And) else (phi,)
-        keep = []
+        keep: list[Formula] = []
         for p in parts:
             fn = self.g.compile(p)
-            if len({fn(s) for s in states}) > 1:
+            if p not in keep and len({fn(s) for s in states}) > 1:
                 keep.append(p)
         return conj(*keep) if keep else phi
 
@@ -494,10 +494,11 @@ class Semantics:
         if not (h_diff or r_diff or p_diff):
             return 0
         cands = bits_of(div)
-        # fix every differing view; failing that, the human's (next options and plans) alone
-        targets = [(h_diff, r_diff, p_diff)]
-        if r_diff and (h_diff or p_diff):
-            targets.append((h_diff, False, p_diff))
+        # make every view equal (fixing one must not break another); failing that, the
+        # human's own (next options and plans) alone
+        targets = [(True, True, plan)]
+        if h_diff or p_diff:
+            targets.append((True, False, plan))
         for want_h, want_r, want_p in targets:
             for size in range(1, min(len(cands), self.comm.inform_max_atoms) + 1):
                 best: tuple[int, int, list[str], int] | None = None
