@@ -8,6 +8,10 @@ The trip to the pantry separates the agents, so the robot's work may go unseen: 
 Variants: 1 = one move each way (K=2); 2 = the human also gets ready at the pantry (K=3);
 3 = turn then move each way, turning away already breaks co-presence (K=4).
 
+``waypoints`` (default 0; for longer trips in the scaling benchmark): the number of places
+``way1`` … ``wayN`` on the way to the pantry, passed in order, one leg each (``turn`` then
+``move`` per leg in variant 3); each waypoint lengthens the round trip by two legs.
+
 Our modelling choices: ``washed``/``seasoned`` are INFERABLE (learned only by witnessing the
 action); the ingredient's place is three nullary atoms; ``cut`` has done-condition ``cut``, so
 "cut if needed, then wash" is a single method.
@@ -24,13 +28,18 @@ VARIANTS = {1: "cooking", 2: "cooking-ready", 3: "cooking-turn"}
 
 
 @domain_factory
-def make_domain(variant: int = 1) -> Domain:
+def make_domain(variant: int = 1, waypoints: int = 0) -> Domain:
     if variant not in VARIANTS:
         raise ValueError(f"variant must be 1, 2 or 3, got {variant!r}")
-    d = Domain(VARIANTS[variant], robot=R, human=H, doc=__doc__ or "")
+    if isinstance(waypoints, bool) or not isinstance(waypoints, int) or waypoints < 0:
+        raise ValueError(f"waypoints must be a whole number of places, 0 or more, "
+                         f"got {waypoints!r}")
+    name = VARIANTS[variant] + (f"-way{waypoints}" if waypoints else "")
+    d = Domain(name, robot=R, human=H, doc=__doc__ or "")
     Place = d.type("place")
     d.constant(KITCHEN, Place)
     d.constant(PANTRY, Place)
+    route = [KITCHEN, *(d.constant(f"way{i}", Place) for i in range(1, waypoints + 1)), PANTRY]
     a = Var("a", "agent")
     p, p1, p2 = (Var(n, Place) for n in ("p", "p1", "p2"))
 
@@ -87,7 +96,9 @@ def make_domain(variant: int = 1) -> Domain:
                       effects=[food_ready()])
 
     def go(src: str, dst: str) -> list[TaskRef]:
-        return ([turn(src, dst)] if variant == 3 else []) + [move(src, dst)]
+        path = route if src == KITCHEN else route[::-1]  # [src, dst] without waypoints
+        return [step for u, v in zip(path, path[1:], strict=False)
+                for step in ([turn(u, v)] if variant == 3 else []) + [move(u, v)]]
 
     h_prep = hm.task("prepare", done=food_ready())
     bring = hm.task("bring")

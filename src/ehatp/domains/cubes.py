@@ -122,8 +122,8 @@ def make_domain(turn_before_move: bool = False,
             return ([turn(src, dst)] if turn_before_move else []) + [move(src, dst)]
         # through the waypoints, in order; src and dst are then the two tables, by name
         path = route if src == MT else route[::-1]
-        return [step for a, b in zip(path, path[1:], strict=False)
-                for step in ([turn(a, b)] if turn_before_move else []) + [move(a, b)]]
+        return [step for u, v in zip(path, path[1:], strict=False)
+                for step in ([turn(u, v)] if turn_before_move else []) + [move(u, v)]]
 
     h_org = hm.task("organize", done=goal())
     h_away = hm.task("put_away", c)
