@@ -6,7 +6,7 @@ order are canonical: the planner's output does not depend on declaration order.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 
@@ -133,16 +133,22 @@ def _bits(m: int) -> Iterable[int]:
         i += 1
 
 
-def ground_problem(problem: Problem) -> Grounded:
+def ground_problem(problem: Problem, check: Callable[[], None] | None = None) -> Grounded:
     """Ground ``problem`` after checking it (a Problem built in Python is checked as a problem
-    file is: unknown predicates, objects or tasks raise InputError, not a KeyError later)."""
+    file is: unknown predicates, objects or tasks raise InputError, not a KeyError later).
+    ``check`` is called once per ground task (a time or memory limit may raise from it)."""
     problem.check()
-    return _Grounder(problem).run()
+    return _Grounder(problem, check).run()
+
+
+def _no_check() -> None:
+    pass
 
 
 class _Grounder:
-    def __init__(self, problem: Problem) -> None:
+    def __init__(self, problem: Problem, check: Callable[[], None] | None = None) -> None:
         self.p = problem
+        self.check = check or _no_check
         self.d: Domain = problem.domain
         self.objects = problem.all_objects()
         self.obj_type = {o: t for t, os in self.objects.items() for o in os}
@@ -300,6 +306,7 @@ class _Grounder:
             if t in seen:
                 continue
             seen.add(t)
+            self.check()
             name, args = calls[t]
             op = model.operators.get(name)
             if op is not None:

@@ -55,6 +55,7 @@ class Limits:
     timeout: float | None = None
     max_states: int = 5_000_000
     max_depth: int = 400
+    max_memory: int | None = None  # bytes of resident memory; [limits] max_memory = "2G"
 
 
 @dataclass(frozen=True)
@@ -138,7 +139,7 @@ _TABLE_KEYS: dict[str, frozenset[str]] = {
     "beliefs.world": frozenset({"true", "false", "robot_agenda"}),
     "agenda": frozenset({"robot", "human"}),
     "costs": frozenset({"inform", "ask", "wait", "pass", "actions"}),
-    "limits": frozenset({"timeout", "max_states", "max_depth"}),
+    "limits": frozenset({"timeout", "max_states", "max_depth", "max_memory"}),
     **OPTION_KEYS,
 }
 _TOP_TABLES = {"problem", "domain", "objects", "init", "beliefs", "agenda", "costs", "limits",
@@ -431,6 +432,8 @@ def load(path: str | Path) -> Problem:
         timeout=float(r.number("[limits] timeout", l_t["timeout"])) if "timeout" in l_t else None,
         max_states=_int(r, "[limits] max_states", l_t.get("max_states", Limits.max_states)),
         max_depth=_int(r, "[limits] max_depth", l_t.get("max_depth", Limits.max_depth)),
+        max_memory=_size(r, "[limits] max_memory", l_t["max_memory"])
+        if "max_memory" in l_t else None,
     )
     human, communication, objective, notes = read_options(r, data)
     after = tuple(r.strings("[problem] after", prob.get("after", [])))
@@ -440,6 +443,31 @@ def load(path: str | Path) -> Problem:
                    communication=communication, objective=objective, notes=notes,
                    goal=tuple(goal), after=after, description=description,
                    source=str(path))
+
+
+def parse_size(v: str | int) -> int:
+    """A memory size in bytes: ``"2G"``, ``"512M"``, ``"1.5GB"``, ``"800k"`` (binary units) or
+    a whole number of bytes; ValueError when it is none of these or not positive."""
+    if isinstance(v, bool) or not isinstance(v, str | int):
+        raise ValueError(f"not a memory size: {v!r}")
+    if isinstance(v, int):
+        n = v
+    else:
+        m = re.match(r"^\s*(\d+(?:\.\d+)?)\s*([kKmMgGtT]?)(?:i?[bB])?\s*$", v)
+        if m is None:
+            raise ValueError(f"not a memory size: {v!r}")
+        n = int(float(m[1]) * 1024 ** " kmgt".index(m[2].lower() or " "))
+    if n <= 0:
+        raise ValueError(f"a memory size must be positive, got {v!r}")
+    return n
+
+
+def _size(r: _Reader, place: str, v: Any) -> int:
+    try:
+        return parse_size(v)
+    except ValueError:
+        raise r.err(place, f"expected a memory size, got {_show(v)}",
+                    'write e.g. "2G", "512M" or a number of bytes') from None
 
 
 def _int(r: _Reader, place: str, v: Any) -> int:

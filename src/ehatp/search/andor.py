@@ -1,34 +1,39 @@
-"""AND/OR graph search over epistemic states.
+"""AND/OR graph search over epistemic states (docs/semantics.md §7, "Search").
 
 Nodes are expanded in order of their cheapest path cost from the root ``g`` (breadth-first when
 every move costs 1, as in the paper's Algorithm 1), with duplicate detection. A node is *solved*
 when it is a goal, a robot node with a solved child, or a human node whose children are all
 solved; solved labels propagate upwards as they appear (the paper's propagate step).
 
-Stopping rule (docs/semantics.md §7, "Search"): for the worst-case objective, once the root is
-solved, worst-case values are computed on the explored graph (:mod:`.values`). If the root's
-value V is at most the ``g`` of every node expanded so far, the policy is optimal: a cheaper
-policy only visits nodes with ``g`` below V, all of which are expanded. The result does not
-depend on exploration order (values are a least fixpoint). Expected cost has no such bound (a
-cheap mean may hide a long rare branch), so for it the whole reachable graph is explored before
-the values are computed. Time and state limits stop either search; the best policy found so far
-is then returned, not proven optimal.
+Stopping rule (§7): for the worst-case objective, once the root is solved its worst-case value V
+is kept up to date as the graph grows (:class:`~.values.LiveWorst`, the same least fixpoint the
+full pass computes). When V is at most the ``g`` of every node expanded so far, the policy is
+optimal: a cheaper policy only visits nodes with ``g`` below V, all of which are expanded. The
+result does not depend on exploration order (values are a least fixpoint). Expected cost has no
+such bound (a cheap mean may hide a long rare branch), so for it the whole reachable graph is
+explored before the values are computed. State, time and memory limits stop either search
+(:mod:`.limits`); the best policy found so far is then returned, not proven optimal.
+
+Memory: the graph keeps one :class:`EState` per distinct state, with the worlds tuples and true
+states shared between the nodes that have equal ones; an edge keeps the child's id and a move
+*descriptor* shared by every edge with the same move (its ``child`` state is not kept, except
+for ``inform``, whose description reads the child's true state); per-node flags are bytes.
 """
 
 from __future__ import annotations
 
 import heapq
-import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
-from ..epistemic.semantics import DEAD_PASSIVE_RUN, Move, Semantics
-from ..epistemic.state import ROBOT, EState
+from ..epistemic.semantics import DEAD_PASSIVE_RUN, INFORM, Move, Semantics
+from ..epistemic.state import ROBOT, EState, Worlds
 from ..errors import InputError
 from ..model.grounding import Grounded
 from ..model.options import ObjectiveKind
 from ..model.problem import Cost
-from .values import Values, compute_values
+from .limits import Budget, LimitReached
+from .values import LiveWorst, Values, compute_values
 
 OPEN, EXPANDED, GOAL, DEAD = 0, 1, 2, 3
 KIND_ORDER = {"silence": -1, "action": 0, "inform": 1, "ask": 2, "wait": 3, "pass": 4}
@@ -36,8 +41,15 @@ KIND_ORDER = {"silence": -1, "action": 0, "inform": 1, "ask": 2, "wait": 3, "pas
 
 @dataclass(slots=True)
 class Edge:
+    """One option (robot) or branch (human) of a node. ``move`` describes the move (shared by
+    the edges of equal moves; its ``child`` state is not kept: None, or for ``inform`` the
+    child node's state); ``child`` is the child node's id, -1 when the move fails."""
+
     move: Move
-    child: int  # -1 when the move fails
+    child: int
+
+
+NO_EDGES: tuple[Edge, ...] = ()
 
 
 @dataclass
@@ -47,6 +59,9 @@ class Stats:
     expanded: int = 0
     max_worlds: int = 0  # largest |W| (the designated world is not counted separately)
     time_s: float = 0.0
+    # for progress displays only (not reported): the work under way and the search frontier
+    phase: str = "search"
+    frontier: int = 0
 
     def as_dict(self) -> dict[str, int | float]:
         return {"generated": self.generated, "distinct": self.distinct,
@@ -54,32 +69,72 @@ class Stats:
                 "time_ms": round(self.time_s * 1000, 1)}
 
 
-@dataclass
 class Graph:
-    sem: Semantics
-    states: list[EState] = field(default_factory=list)
-    index: dict[EState, int] = field(default_factory=dict)
-    status: list[int] = field(default_factory=list)
-    dead_why: dict[int, str] = field(default_factory=dict)
-    edges: list[list[Edge]] = field(default_factory=list)
-    parents: list[list[int]] = field(default_factory=list)  # one entry per edge into the node
-    g: list[Cost] = field(default_factory=list)
-    depth: list[int] = field(default_factory=list)
-    solved: list[bool] = field(default_factory=list)
-    pending: list[int] = field(default_factory=list)  # human nodes: unsolved edges left
+    """The explored AND/OR graph, as parallel per-node arrays indexed by node id."""
 
-    def add(self, es: EState, g: Cost, depth: int) -> int:
+    def __init__(self, sem: Semantics) -> None:
+        self.sem = sem
+        self.states: list[EState] = []
+        self.index: dict[EState, int] = {}
+        self.status = bytearray()  # OPEN, EXPANDED, GOAL or DEAD
+        self.dead_why: dict[int, str] = {}
+        self.edges: list[tuple[Edge, ...]] = []  # in canonical move order, once expanded
+        # the parents, one entry per edge into the node: -1 for none, a node id for one, a
+        # list beyond (most nodes have one parent)
+        self._parents: list[int | list[int]] = []
+        self.g: list[Cost] = []
+        self.depth: list[int] = []
+        self.solved = bytearray()
+        self.pending: list[int] = []  # human nodes: unsolved edges left
+        self._worlds: dict[Worlds, Worlds] = {}
+        self._trues: dict[int, int] = {}
+        self._moves: dict[tuple[object, ...], Move] = {}
+
+    def add(self, es: EState, g: Cost, depth: int, parent: int = -1) -> int:
+        """A new node for ``es`` (worlds and true state shared with equal ones)."""
+        w = self._worlds.setdefault(es.worlds, es.worlds)
+        t = self._trues.setdefault(es.true, es.true)
+        if w is not es.worlds or t is not es.true:
+            es = es._replace(true=t, worlds=w)
         i = len(self.states)
         self.states.append(es)
         self.index[es] = i
         self.status.append(OPEN)
-        self.edges.append([])
-        self.parents.append([])
+        self.edges.append(NO_EDGES)
+        self._parents.append(parent)
         self.g.append(g)
         self.depth.append(depth)
-        self.solved.append(False)
+        self.solved.append(0)
         self.pending.append(0)
         return i
+
+    def add_parent(self, c: int, p: int) -> None:
+        ps = self._parents[c]
+        if isinstance(ps, list):
+            ps.append(p)
+        elif ps < 0:
+            self._parents[c] = p
+        else:
+            self._parents[c] = [ps, p]
+
+    def parents(self, n: int) -> list[int]:
+        """One entry per edge into ``n`` (a parent with two edges to ``n`` is there twice)."""
+        ps = self._parents[n]
+        if isinstance(ps, list):
+            return ps
+        return [] if ps < 0 else [ps]
+
+    def descriptor(self, m: Move, child: int) -> Move:
+        """``m`` without its child state, shared between equal moves (see :class:`Edge`)."""
+        if m.kind == INFORM and child >= 0:  # describe() reads the child's true state
+            return Move(m.agent, m.kind, m.label, m.cost, self.states[child], m.op, m.atoms,
+                        m.failure, m.waits)
+        key = (m.agent, m.kind, m.label, m.cost, m.op, m.atoms, m.failure, m.waits)
+        d = self._moves.get(key)
+        if d is None:
+            d = self._moves[key] = Move(m.agent, m.kind, m.label, m.cost, None, m.op, m.atoms,
+                                        m.failure, m.waits)
+        return d
 
     def is_robot(self, n: int) -> bool:
         return self.states[n].turn == ROBOT
@@ -90,26 +145,43 @@ class SearchOutcome:
     graph: Graph
     root: int
     stats: Stats
-    status: str  # "solved" | "unsolvable" | "timeout" | "state-limit"
+    status: str  # "solved" | "unsolvable" | "timeout" | "state-limit" | "memory-limit"
     values: Values | None
     optimal: bool
+    reason: str = ""  # which limit stopped the search, in words
 
 
 Progress = Callable[[Stats, int], None]
 
 
 def search(grounded: Grounded, *, timeout: float | None = None, max_states: int | None = None,
-           max_depth: int | None = None, progress: Progress | None = None) -> SearchOutcome:
+           max_depth: int | None = None, progress: Progress | None = None,
+           max_memory: int | None = None, budget: Budget | None = None,
+           stats: Stats | None = None) -> SearchOutcome:
+    """§7: explore from the root until the optimum is proven (worst case), everything
+    reachable is explored (expected cost), or a limit is reached; then the values.
+
+    Limits default to the problem's ``[limits]``; ``budget`` (time and memory for the whole
+    solve, :class:`~.limits.Budget`) replaces ``timeout`` and ``max_memory`` when given.
+    ``progress(stats, frontier)`` is called about 20 times a second; ``stats``, when given, is
+    the object the search keeps its statistics in."""
     limits = grounded.problem.limits
-    timeout = limits.timeout if timeout is None else timeout
     max_states = limits.max_states if max_states is None else max_states
     max_depth = limits.max_depth if max_depth is None else max_depth
+    stats = Stats() if stats is None else stats
+    if budget is None:
+        budget = Budget(limits.timeout if timeout is None else timeout,
+                        limits.max_memory if max_memory is None else max_memory)
+    if progress is not None and budget.on_poll is None:
+        def poll(b: Budget) -> None:
+            stats.time_s = b.elapsed()
+            progress(stats, stats.frontier)
+        budget.on_poll = poll
+    budget.phase = "search"
     # worst case: stop as soon as the optimum is proven; expected cost: explore everything
     early_stop = grounded.problem.objective.kind == ObjectiveKind.WORST_CASE
     sem = Semantics(grounded)
     gr = Graph(sem)
-    stats = Stats()
-    start = time.perf_counter()
     root_state = sem.initial()
     for i, label in enumerate(grounded.problem.after):
         try:
@@ -122,41 +194,58 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
     stats.max_worlds = len(root_state.worlds)
     heap: list[tuple[Cost, int, int]] = [(0, 0, root)]
     level: Cost = 0
-    status = "unsolvable"
+    status, reason = "unsolvable", ""
     values: Values | None = None
     optimal = False
-    while heap:
-        g, _, n = heapq.heappop(heap)
-        if gr.status[n] != OPEN or g > gr.g[n]:
-            continue
-        if g > level:
-            # every node with g <= level is expanded: the optimum may be proven now
-            if early_stop and gr.solved[root]:
-                values = compute_values(gr, root)
-                if values.value[root] <= level:
+    live: LiveWorst | None = None  # worst-case values, kept once the root is solved
+    try:
+        while heap:
+            g, _, n = heapq.heappop(heap)
+            if gr.status[n] != OPEN or g > gr.g[n]:
+                continue
+            if g > level:
+                # every node with g <= level is expanded: the optimum may be proven now
+                if live is not None and live.root_value(root) <= level:
                     status, optimal = "solved", True
                     break
-            level = g
-        if stats.expanded & 255 == 0:
-            elapsed = time.perf_counter() - start
-            if progress is not None:
-                stats.time_s = elapsed
-                progress(stats, len(heap))
-            if timeout is not None and elapsed > timeout:
-                status = "timeout"
+                level = g
+            stats.frontier = len(heap)
+            stop = budget.search_should_stop(stats.distinct, bool(gr.solved[root]))
+            if stop is not None:
+                status, reason = stop.status, stop.reason
                 break
-        if stats.distinct >= max_states:
-            status = "state-limit"
-            break
-        _expand(gr, n, heap, stats, max_depth)
-    else:
-        if gr.solved[root]:
-            values = compute_values(gr, root)
-            status, optimal = "solved", values.exact
-    if status in ("timeout", "state-limit") and gr.solved[root]:
-        values = compute_values(gr, root)  # best policy found so far, not proven optimal
-    stats.time_s = time.perf_counter() - start
-    return SearchOutcome(gr, root, stats, status, values, optimal)
+            if stats.distinct >= max_states:
+                status, reason = "state-limit", f"state limit reached ({stats.distinct} " \
+                                                "distinct states)"
+                break
+            _expand(gr, n, heap, stats, max_depth)
+            if live is not None:
+                live.expanded(n)
+            elif early_stop and gr.solved[root]:
+                budget.phase = "search (first worst-case pass)"
+                live = LiveWorst(gr, budget)
+                budget.phase = "search"
+        else:
+            if gr.solved[root]:
+                values = compute_values(gr, root, budget=budget)
+                status, optimal = "solved", values.exact
+        if status in ("timeout", "state-limit", "memory-limit") and gr.solved[root]:
+            values = compute_values(gr, root, budget=budget)  # best so far, not optimal
+        elif status == "solved" and values is None:
+            live = None  # its arrays are not needed any more
+            values = compute_values(gr, root, budget=budget)
+    except LimitReached as e:
+        status, reason, values, optimal = e.status, e.reason, None, False
+    except MemoryError:  # the graph may be half-updated: no values from it
+        live = values = None
+        oom = budget.out_of_memory()
+        status, reason, optimal = oom.status, oom.reason, False
+    stats.time_s = budget.elapsed()
+    return SearchOutcome(gr, root, stats, status, values, optimal, reason)
+
+
+def _move_key(m: Move) -> tuple[object, ...]:
+    return (KIND_ORDER[m.kind], m.label, m.child is None, m.child or ())
 
 
 def _expand(gr: Graph, n: int, heap: list[tuple[Cost, int, int]], stats: Stats,
@@ -174,30 +263,32 @@ def _expand(gr: Graph, n: int, heap: list[tuple[Cost, int, int]], stats: Stats,
     if gr.depth[n] >= max_depth:
         gr.status[n], gr.dead_why[n] = DEAD, f"depth limit {max_depth} reached"
         return
-    gr.status[n] = EXPANDED
-    moves = sorted(sem.moves(es), key=lambda m: (KIND_ORDER[m.kind], m.label,
-                                                 m.child is None, m.child or ()))
+    moves = sorted(sem.moves(es), key=_move_key)
     g0, d0 = gr.g[n], gr.depth[n] + 1
-    edges = gr.edges[n]
+    index, gs, status = gr.index, gr.g, gr.status
+    edges: list[Edge] = []
     for m in moves:
-        if m.child is None:
-            edges.append(Edge(m, -1))
+        child = m.child
+        if child is None:
+            edges.append(Edge(gr.descriptor(m, -1), -1))
             continue
         stats.generated += 1
-        child = m.child
-        c = gr.index.get(child)
+        c = index.get(child)
         g1 = g0 + m.cost
         if c is None:
-            c = gr.add(child, g1, d0)
+            c = gr.add(child, g1, d0, n)
             stats.distinct += 1
             if len(child.worlds) > stats.max_worlds:
                 stats.max_worlds = len(child.worlds)
             heapq.heappush(heap, (g1, c, c))
-        elif g1 < gr.g[c] and gr.status[c] == OPEN:
-            gr.g[c], gr.depth[c] = g1, d0
-            heapq.heappush(heap, (g1, c, c))
-        edges.append(Edge(m, c))
-        gr.parents[c].append(n)
+        else:
+            if g1 < gs[c] and status[c] == OPEN:
+                gs[c], gr.depth[c] = g1, d0
+                heapq.heappush(heap, (g1, c, c))
+            gr.add_parent(c, n)
+        edges.append(Edge(gr.descriptor(m, c), c))
+    gr.edges[n] = tuple(edges)
+    gr.status[n] = EXPANDED
     if not gr.is_robot(n):
         gr.pending[n] = len(edges) + (1 if not edges else 0)
     for e in edges:
@@ -218,17 +309,17 @@ def _child_solved(gr: Graph, p: int) -> None:
 
 def _mark_solved(gr: Graph, n: int) -> None:
     stack = [n]
-    gr.solved[n] = True
+    gr.solved[n] = 1
     while stack:
         c = stack.pop()
-        for p in gr.parents[c]:
+        for p in gr.parents(c):
             if gr.solved[p] or gr.status[p] != EXPANDED:
                 continue
             if gr.is_robot(p):
-                gr.solved[p] = True
+                gr.solved[p] = 1
                 stack.append(p)
             else:
                 gr.pending[p] -= 1
                 if gr.pending[p] == 0:
-                    gr.solved[p] = True
+                    gr.solved[p] = 1
                     stack.append(p)

@@ -8,14 +8,15 @@ from typing import Any
 from ..model.grounding import ground_problem
 from ..model.problem import Problem
 from ..policy_format import Policy
-from .andor import Progress, search
+from .andor import Progress, Stats, search
 from .diagnose import diagnose
+from .limits import Budget, LimitReached
 from .policy import explain_failure, extract
 
 
 @dataclass
 class Result:
-    status: str  # "solved" | "unsolvable" | "timeout" | "state-limit"
+    status: str  # "solved" | "unsolvable" | "timeout" | "state-limit" | "memory-limit"
     policy: Policy | None
     stats: dict[str, Any] = field(default_factory=dict)
     reason: str = ""
@@ -26,40 +27,74 @@ class Result:
         return self.policy is not None
 
 
+LIMITS = ("timeout", "state-limit", "memory-limit")
+
+
 def solve(problem: Problem, *, timeout: float | None = None, max_states: int | None = None,
-          max_depth: int | None = None, progress: Progress | None = None) -> Result:
+          max_depth: int | None = None, progress: Progress | None = None,
+          max_memory: int | None = None, budget: Budget | None = None) -> Result:
     """Plan a robot policy for ``problem``, optimal under ``problem.objective``
     (docs/semantics.md §7: worst-case by default, or expected cost).
 
-    Limits default to the problem's ``[limits]``. When a limit stops the search the result
-    carries partial statistics, and the best policy found so far if there is one
-    (``optimal`` False).
+    Limits default to the problem's ``[limits]``; ``timeout`` (seconds) and ``max_memory``
+    (bytes of resident memory) bound the whole call — grounding, search, values and
+    extraction — or pass a ``budget`` (:class:`~ehatp.search.limits.Budget`) shared with the
+    caller's own work, such as writing the policy. When a limit stops the work the result
+    carries partial statistics, and the best policy found so far if there is one (``optimal``
+    False); ``reason`` says which limit. ``progress(stats, frontier)`` is called about 20 times
+    a second, ``stats.phase`` naming the work under way.
     """
-    grounded = ground_problem(problem)
-    out = search(grounded, timeout=timeout, max_states=max_states, max_depth=max_depth,
-                 progress=progress)
+    limits = problem.limits
+    if budget is None:
+        budget = Budget(limits.timeout if timeout is None else timeout,
+                        limits.max_memory if max_memory is None else max_memory)
+    live = Stats()
+    if progress is not None and budget.on_poll is None:
+        def poll(b: Budget) -> None:
+            live.time_s, live.phase = b.elapsed(), b.phase
+            progress(live, live.frontier)
+        budget.on_poll = poll
+    budget.phase = "grounding"
+    try:
+        grounded = ground_problem(problem, check=budget.check)
+    except LimitReached as e:
+        return Result(e.status, None, {**live.as_dict(), "time_ms": round(budget.elapsed()
+                                                                          * 1000, 1)},
+                      e.reason)
+    except MemoryError:
+        oom = budget.out_of_memory()
+        return Result(oom.status, None, live.as_dict(), oom.reason)
+    out = search(grounded, max_states=max_states, max_depth=max_depth, budget=budget,
+                 stats=live)
     stats: dict[str, Any] = out.stats.as_dict()
     stats["atoms"] = len(grounded.atoms)
+    status, reason, optimal = out.status, out.reason, out.optimal
     policy = None
     if out.values is not None and out.values.value[out.root] != float("inf"):
         public = {k: v for k, v in stats.items() if k != "time_ms"}
-        policy = extract(out.graph, out.root, out.values, problem_name=problem.name,
-                         optimal=out.optimal, stats=public)
-        stats.update(cost=policy.cost, communications=policy.communications,
-                     leaves=policy.leaves, worst_case=policy.worst_case,
-                     expected=policy.expected)
-    reason = ""
-    if out.status == "unsolvable":
+        budget.phase = "extraction"
+        try:
+            budget.check()
+            policy = extract(out.graph, out.root, out.values, problem_name=problem.name,
+                             optimal=optimal, stats=public)
+            budget.check()
+        except LimitReached as e:
+            status, reason, optimal, policy = e.status, e.reason, False, None
+        except MemoryError:
+            oom = budget.out_of_memory()
+            status, reason, optimal, policy = oom.status, oom.reason, False, None
+        if policy is not None:
+            stats.update(cost=policy.cost, communications=policy.communications,
+                         leaves=policy.leaves, worst_case=policy.worst_case,
+                         expected=policy.expected)
+    if status == "unsolvable":
         # name the goal literals or agendas that fail everywhere; a line of play that dies
         # is only the fallback (it is one of many, and may look arbitrary)
         graph, root = out.graph, out.root
         reason = "no policy exists: " + diagnose(grounded, graph,
                                                  lambda: explain_failure(graph, root))
-    elif out.status == "timeout":
-        reason = f"time limit reached after {out.stats.time_s:.1f} s"
-    elif out.status == "state-limit":
-        reason = f"state limit reached ({out.stats.distinct} distinct states)"
-    elif not out.optimal:  # §7: expected cost on a solvable graph with cycles
+    elif status == "solved" and not optimal:  # §7: expected cost on a graph with cycles
         reason = ("not proven optimal: the solvable graph has cycles, so choices inside them "
                   "were restricted to those of the worst-case pass")
-    return Result(out.status, policy, stats, reason, out.optimal)
+    budget.phase = "done"
+    return Result(status, policy, stats, reason, optimal)

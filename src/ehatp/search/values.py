@@ -19,6 +19,13 @@ sub-policy), ``waits`` (human ``pass`` moves made waiting: its agenda unfinished
 is sure of), ``length`` (the average branch length, decided choice by choice since the average
 is not decomposable), ``worst-case`` / ``expected`` (that value of the chosen sub-policy); a
 final tie goes to the first option in canonical order.
+
+**During the search** (§7, "Search"), :class:`LiveWorst` keeps the worst-case values of the
+growing graph up to date, so that the stopping rule reads the root's value instead of redoing
+the whole pass at every cost level.
+
+Every long loop here calls ``budget.check()`` (:mod:`.limits`), so time and memory limits hold
+inside the passes too.
 """
 
 from __future__ import annotations
@@ -35,63 +42,79 @@ from ..model.problem import Cost
 
 if TYPE_CHECKING:
     from .andor import Graph
+    from .limits import Budget
 
 INF = float("inf")
-
-
-@dataclass(frozen=True, slots=True)
-class Tally:
-    """Totals over a sub-policy (the chosen options below a node, every human branch)."""
-
-    comms: int
-    waits: int  # human passes made waiting for the robot or for information
-    leaves: int
-    length: int  # sum over leaves of their distance (in moves) from this node
-    worst: Cost  # the sub-policy's worst-case cost
-    mean: Cost | None  # its expected cost (None when neither objective nor ties need it)
-
-    def key(self) -> tuple[int, int, Fraction]:
-        """The default tie key: communications, waits, average branch length."""
-        return (self.comms, self.waits, Fraction(self.length, self.leaves))
-
-
-LEAF = Tally(0, 0, 1, 0, 0, 0)
+CHECK_EVERY = 1023  # budget.check() once per this many + 1 nodes
 
 
 @dataclass
 class Values:
     value: list[Cost | float]  # under the objective; INF where no proper policy was found
-    choice: dict[int, int]  # robot node -> index of the chosen edge
-    tally: dict[int, Tally]  # the chosen sub-policy's totals
+    # robot node -> index of the chosen edge, for the nodes of the chosen policy (those the
+    # root reaches through the choices)
+    choice: dict[int, int]
     worst: list[Cost | float]  # worst-case values (the same list as ``value`` for worst-case)
     exact: bool = True  # False: cycles restricted the expected-cost choices (§7)
 
 
-def compute_values(gr: Graph, root: int, objective: Objective | None = None) -> Values:
-    """§7: the values of ``gr`` under ``objective`` (default: the problem's), the robot's
-    choice at every solved node and the totals of the chosen sub-policies."""
+def compute_values(gr: Graph, root: int, objective: Objective | None = None,
+                   budget: Budget | None = None) -> Values:
+    """§7: the values of ``gr`` under ``objective`` (default: the problem's) and the robot's
+    choice at every node of the chosen policy."""
     obj = gr.sem.g.problem.objective if objective is None else objective
-    worst, order = knuth(gr)
+    if budget is not None:
+        budget.phase = "values (worst case)"
+    worst, order = knuth(gr, budget)
     n_nodes = len(worst)
     pos = [n_nodes] * n_nodes  # position in the Knuth order (n_nodes: never finalised)
     for i, n in enumerate(order):
         pos[n] = i
     need_mean = obj.kind == ObjectiveKind.EXPECTED or "expected" in obj.ties
     if obj.kind == ObjectiveKind.WORST_CASE:
-        choice, tally = _choose(gr, order, lambda n, c: pos[c] < pos[n], obj, need_mean)
-        return Values(worst, choice, tally, worst)
+        if budget is not None:
+            budget.phase = "values (choices)"
+        choice, _ = _choose(gr, order, lambda n, c: pos[c] < pos[n], obj, need_mean, budget)
+        return Values(worst, _reachable(gr, root, choice), worst)
     if worst[root] == INF:
-        return Values([INF] * n_nodes, {}, {}, worst)
-    topo, allowed, exact = expected_order(gr, root, worst, pos)
-    choice, tally = _choose(gr, topo, allowed, obj, need_mean)
+        return Values([INF] * n_nodes, {}, worst)
+    if budget is not None:
+        budget.phase = "values (expected cost)"
+    topo, allowed, exact = expected_order(gr, root, worst, pos, budget)
+    choice, mean = _choose(gr, topo, allowed, obj, need_mean, budget)
     value: list[Cost | float] = [INF] * n_nodes
-    for n, t in tally.items():
-        assert t.mean is not None
-        value[n] = t.mean
-    return Values(value, choice, tally, worst, exact)
+    assert mean is not None
+    for n in topo:
+        m = mean[n]
+        assert m is not None
+        value[n] = m
+    return Values(value, _reachable(gr, root, choice), worst, exact)
 
 
-def knuth(gr: Graph) -> tuple[list[Cost | float], list[int]]:
+def _reachable(gr: Graph, root: int, choice: dict[int, int]) -> dict[int, int]:
+    """The choices of the nodes the root reaches through them (the policy's robot nodes)."""
+    out: dict[int, int] = {}
+    seen = {root}
+    stack = [root]
+    while stack:
+        n = stack.pop()
+        edges = gr.edges[n]
+        i = choice.get(n)
+        if i is not None:
+            out[n] = i
+            kids = [edges[i].child]
+        elif gr.is_robot(n):
+            continue  # a goal, or not solved
+        else:
+            kids = [e.child for e in edges]
+        for c in kids:
+            if c >= 0 and c not in seen:
+                seen.add(c)
+                stack.append(c)
+    return out
+
+
+def knuth(gr: Graph, budget: Budget | None = None) -> tuple[list[Cost | float], list[int]]:
     """§7, worst case: the least fixpoint of the min/max equations by Knuth's generalisation of
     Dijkstra's algorithm; returns the values and the order in which nodes were finalised
     (every child a node's value comes from is finalised before it)."""
@@ -99,33 +122,39 @@ def knuth(gr: Graph) -> tuple[list[Cost | float], list[int]]:
 
     n_nodes = len(gr.states)
     value: list[Cost | float] = [INF] * n_nodes
-    final = [False] * n_nodes
+    final = bytearray(n_nodes)
     remaining = [0] * n_nodes
     worst: list[Cost] = [0] * n_nodes
     heap: list[tuple[Cost, int]] = []
+    status, states, edges_of = gr.status, gr.states, gr.edges
     for n in range(n_nodes):
-        if gr.status[n] == GOAL:
+        if status[n] == GOAL:
             heap.append((0, n))
-        elif not gr.is_robot(n):
-            edges = gr.edges[n]
-            remaining[n] = len(edges) if all(e.child >= 0 for e in edges) and edges else -1
+        elif states[n].turn != 0:  # a human node
+            edges = edges_of[n]
+            remaining[n] = len(edges) if edges and all(e.child >= 0 for e in edges) else -1
+        if budget is not None and not n & CHECK_EVERY:
+            budget.check()
     heapq.heapify(heap)
     order: list[int] = []
     while heap:
         v, n = heapq.heappop(heap)
         if final[n]:
             continue
-        final[n] = True
+        final[n] = 1
         value[n] = v
         order.append(n)
-        for p in set(gr.parents[n]):
+        if budget is not None and not len(order) & CHECK_EVERY:
+            budget.check()
+        for p in set(gr.parents(n)):
             if final[p]:
                 continue
-            for e in gr.edges[p]:
+            robot = states[p].turn == 0
+            for e in edges_of[p]:
                 if e.child != n:
                     continue
                 cand = v + e.move.cost
-                if gr.is_robot(p):
+                if robot:
                     if cand < value[p]:
                         value[p] = cand
                         heapq.heappush(heap, (cand, p))
@@ -138,7 +167,104 @@ def knuth(gr: Graph) -> tuple[list[Cost | float], list[int]]:
     return value, order
 
 
-def expected_order(gr: Graph, root: int, worst: list[Cost | float], pos: list[int]
+class LiveWorst:
+    """§7, "Search": the worst-case values of a graph that grows, kept equal to what
+    :func:`knuth` would compute on it now, so the stopping rule reads ``value[root]``.
+
+    Created once the root is solved (one full pass); then :meth:`expanded` after every
+    expansion. Adding a node's edges can only lower values (a robot node gains options, a
+    human node goes from no value to one), so an update is a Dijkstra-like wave of decreases
+    from the expanded node up through its ancestors, in increasing order of the new values,
+    each node re-evaluated from its children's current values. When the wave ends every node
+    satisfies its min/max equation again, and with positive costs those equations have one
+    solution only (a node below its least-fixpoint value would need a child further below, on
+    and on, down a strictly decreasing chain), so the values are Knuth's exactly. The robot's
+    zero-cost ``silence`` keeps this true (it leads to a human node, whose moves all cost more
+    than 0); if any other move could cost 0 the root is recomputed by a full pass instead."""
+
+    def __init__(self, gr: Graph, budget: Budget | None = None) -> None:
+        self.gr = gr
+        self.budget = budget
+        self.value, _ = knuth(gr, budget)
+        self.incremental = _positive_costs(gr)
+
+    def expanded(self, n: int) -> None:
+        """Node ``n`` was just expanded (its edges, possibly new nodes, are in the graph)."""
+        value = self.value
+        missing = len(self.gr.states) - len(value)
+        if missing:
+            value.extend([INF] * missing)
+        if not self.incremental:
+            return
+        v = self._eval(n)
+        if v < value[n]:
+            self._lower(n, v)
+
+    def root_value(self, root: int) -> Cost | float:
+        if not self.incremental:
+            self.value, _ = knuth(self.gr, self.budget)
+        return self.value[root]
+
+    def _eval(self, n: int) -> Cost | float:
+        """``n``'s equation on the current values of its children."""
+        from .andor import GOAL
+
+        gr, value = self.gr, self.value
+        if gr.status[n] == GOAL:
+            return 0
+        edges = gr.edges[n]
+        if gr.states[n].turn == 0:  # robot: the best option
+            best: Cost | float = INF
+            for e in edges:
+                if e.child >= 0:
+                    x = e.move.cost + value[e.child]
+                    if x < best:
+                        best = x
+            return best
+        if not edges:
+            return INF
+        worst: Cost | float = 0
+        for e in edges:
+            if e.child < 0:
+                return INF
+            x = e.move.cost + value[e.child]
+            if x > worst:
+                worst = x
+        return worst
+
+    def _lower(self, n: int, v: Cost | float) -> None:
+        gr, value = self.gr, self.value
+        states, edges_of = gr.states, gr.edges
+        heap: list[tuple[Cost | float, int]] = [(v, n)]
+        while heap:
+            v, x = heapq.heappop(heap)
+            if v >= value[x]:
+                continue  # stale: lowered further already
+            value[x] = v
+            for p in set(gr.parents(x)):
+                if not edges_of[p]:
+                    continue
+                if states[p].turn == 0:
+                    cand: Cost | float = INF
+                    for e in edges_of[p]:
+                        if e.child == x and e.move.cost + v < cand:
+                            cand = e.move.cost + v
+                else:
+                    cand = self._eval(p)
+                if cand < value[p]:
+                    heapq.heappush(heap, (cand, p))
+
+
+def _positive_costs(gr: Graph) -> bool:
+    """Whether every move but the robot's ``silence`` costs more than 0 (see LiveWorst)."""
+    g = gr.sem.g
+    c = g.problem.costs
+    return (min(c.inform, c.ask, c.wait, c.pass_) > 0
+            and all(op.cost > 0 for m in (g.robot, g.human) for op in m.ops.values()))
+
+
+def expected_order(gr: Graph, root: int, worst: list[Cost | float], pos: list[int],
+                   budget: Budget | None = None
                    ) -> tuple[list[int], Callable[[int, int], bool], bool]:
     """§7, expected cost: the order of the backward pass, the robot options it may take, and
     whether the result is exact.
@@ -184,7 +310,7 @@ def expected_order(gr: Graph, root: int, worst: list[Cost | float], pos: list[in
     # Tarjan's strongly connected components, iteratively; components come out children first
     index = [-1] * n_nodes
     low = [0] * n_nodes
-    on_stack = [False] * n_nodes
+    on_stack = bytearray(n_nodes)
     comp = [-1] * n_nodes
     stack: list[int] = []
     order: list[int] = []
@@ -193,9 +319,13 @@ def expected_order(gr: Graph, root: int, worst: list[Cost | float], pos: list[in
     index[root] = low[root] = counter
     counter += 1
     stack.append(root)
-    on_stack[root] = True
+    on_stack[root] = 1
     work: list[tuple[int, int]] = [(root, 0)]
+    steps = 0
     while work:
+        steps += 1
+        if budget is not None and not steps & CHECK_EVERY:
+            budget.check()
         n, i = work[-1]
         ks = children(n)
         if i < len(ks):
@@ -205,12 +335,13 @@ def expected_order(gr: Graph, root: int, worst: list[Cost | float], pos: list[in
                 index[c] = low[c] = counter
                 counter += 1
                 stack.append(c)
-                on_stack[c] = True
+                on_stack[c] = 1
                 work.append((c, 0))
             elif on_stack[c] and index[c] < low[n]:
                 low[n] = index[c]
             continue
         work.pop()
+        del kids[n]
         if work and low[n] < low[work[-1][0]]:
             low[work[-1][0]] = low[n]
         if low[n] != index[n]:
@@ -218,7 +349,7 @@ def expected_order(gr: Graph, root: int, worst: list[Cost | float], pos: list[in
         members: list[int] = []
         while True:
             x = stack.pop()
-            on_stack[x] = False
+            on_stack[x] = 0
             comp[x] = n_comps
             members.append(x)
             if x == n:
@@ -228,6 +359,7 @@ def expected_order(gr: Graph, root: int, worst: list[Cost | float], pos: list[in
         members.sort(key=pos.__getitem__)
         order.extend(members)
         n_comps += 1
+    del index, low, on_stack
 
     def allowed(n: int, c: int) -> bool:
         return worst[c] != INF and (comp[c] != comp[n] or pos[c] < pos[n])
@@ -236,14 +368,17 @@ def expected_order(gr: Graph, root: int, worst: list[Cost | float], pos: list[in
 
 
 def _choose(gr: Graph, order: list[int], allowed: Callable[[int, int], bool], obj: Objective,
-            need_mean: bool) -> tuple[dict[int, int], dict[int, Tally]]:
+            need_mean: bool, budget: Budget | None = None
+            ) -> tuple[dict[int, int], list[Cost | None] | None]:
     """Visit ``order`` (children before parents): pick each robot node's option among the
     ``allowed`` ones by the objective's value, then the tie keys, then canonical order; total
-    each chosen sub-policy."""
+    each chosen sub-policy (§7 ties: communications, waits, leaves and their summed length,
+    worst case, expected cost), in arrays indexed by node. Returns the choices and the
+    expected costs (None unless ``need_mean``)."""
     from .andor import GOAL
 
     expected = obj.kind == ObjectiveKind.EXPECTED
-    getters = [_TIE_KEYS[k] for k in obj.ties]
+    ties = obj.ties
     weights: dict[str, Fraction] = {}
 
     def weight(m: Move) -> Fraction:
@@ -252,48 +387,101 @@ def _choose(gr: Graph, order: list[int], allowed: Callable[[int, int], bool], ob
             w = weights[m.label] = obj.weight(m.label, gr.sem.describe(m).name)
         return w
 
+    n_nodes = len(gr.states)
+    comms = [0] * n_nodes
+    waits = [0] * n_nodes
+    leaves = [0] * n_nodes
+    length = [0] * n_nodes  # sum over leaves of their distance (in moves) from the node
+    worst: list[Cost] = [0] * n_nodes
+    mean: list[Cost | None] | None = [None] * n_nodes if need_mean else None
+    done = bytearray(n_nodes)
+
+    def tie_key(m: Move, c: int) -> tuple[object, ...]:
+        """The tie keys of the option ``m`` to ``c``, as seen from its parent."""
+        out: list[object] = []
+        for k in ties:
+            if k == "communications":
+                out.append(comms[c] + (1 if speaks(m) else 0))
+            elif k == "waits":
+                out.append(waits[c] + (1 if m.waits else 0))
+            elif k == "length":
+                out.append(Fraction(length[c] + leaves[c], leaves[c]))
+            elif k == "worst-case":
+                out.append(m.cost + worst[c])
+            else:  # expected
+                assert mean is not None
+                mc = mean[c]
+                out.append(None if mc is None else m.cost + mc)
+        return tuple(out)
+
     choice: dict[int, int] = {}
-    tally: dict[int, Tally] = {}
-    for n in order:
-        if gr.status[n] == GOAL:
-            tally[n] = LEAF
+    status, states = gr.status, gr.states
+    for step, n in enumerate(order):
+        if budget is not None and not step & CHECK_EVERY:
+            budget.check()
+        done[n] = 1
+        if status[n] == GOAL:
+            leaves[n] = 1
+            if mean is not None:
+                mean[n] = 0
             continue
         edges = gr.edges[n]
-        if gr.is_robot(n):
-            best: tuple[Cost, tuple[object, ...], int] | None = None
-            best_t: Tally | None = None
+        if states[n].turn == 0:  # robot: the best allowed option
+            best_i = -1
+            best_v: Cost = 0
+            best_k: tuple[object, ...] | None = None
             for i, e in enumerate(edges):
                 c = e.child
-                if c < 0 or c not in tally or not allowed(n, c):
+                if c < 0 or not done[c] or not allowed(n, c):
                     continue
-                t = _through(e.move, tally[c], need_mean)
-                v = t.mean if expected else t.worst
-                assert v is not None
-                k = (v, tuple(get(t) for get in getters), i)
-                if best is None or k < best:
-                    best, best_t = k, t
-            assert best is not None and best_t is not None
-            choice[n] = best[2]
-            tally[n] = best_t
-        else:
-            parts = [_through(e.move, tally[e.child], need_mean) for e in edges]
-            mean: Cost | None = None
-            if need_mean:
-                mean = weighted_mean([weight(e.move) for e in edges],
-                                     [p.mean for p in parts if p.mean is not None])
-            tally[n] = Tally(sum(p.comms for p in parts), sum(p.waits for p in parts),
-                             sum(p.leaves for p in parts), sum(p.length for p in parts),
-                             max(p.worst for p in parts), mean)
-    return choice, tally
-
-
-_TIE_KEYS: dict[str, Callable[[Tally], object]] = {
-    "communications": lambda t: t.comms,
-    "waits": lambda t: t.waits,
-    "length": lambda t: Fraction(t.length, t.leaves),
-    "worst-case": lambda t: t.worst,
-    "expected": lambda t: t.mean,
-}
+                m = e.move
+                if expected:
+                    assert mean is not None
+                    mc = mean[c]
+                    assert mc is not None
+                    v = m.cost + mc
+                else:
+                    v = m.cost + worst[c]
+                if best_i < 0 or v < best_v:
+                    best_i, best_v, best_k = i, v, None
+                elif v == best_v and ties:
+                    if best_k is None:
+                        b = edges[best_i]
+                        best_k = tie_key(b.move, b.child)
+                    k = tie_key(m, c)
+                    if k < best_k:
+                        best_i, best_k = i, k
+            assert best_i >= 0
+            choice[n] = best_i
+            e = edges[best_i]
+            c, m = e.child, e.move
+            comms[n] = comms[c] + (1 if speaks(m) else 0)
+            waits[n] = waits[c] + (1 if m.waits else 0)
+            leaves[n] = leaves[c]
+            length[n] = length[c] + leaves[c]
+            worst[n] = m.cost + worst[c]
+            if mean is not None:
+                mc = mean[c]
+                mean[n] = None if mc is None else m.cost + mc
+        else:  # human: every branch
+            sc = sw = sl = slen = 0
+            wc: Cost = 0
+            for e in edges:
+                c, m = e.child, e.move
+                sc += comms[c] + (1 if speaks(m) else 0)
+                sw += waits[c] + (1 if m.waits else 0)
+                sl += leaves[c]
+                slen += length[c] + leaves[c]
+                x = m.cost + worst[c]
+                if x > wc:
+                    wc = x
+            comms[n], waits[n], leaves[n], length[n], worst[n] = sc, sw, sl, slen, wc
+            if mean is not None:
+                ms = [mean[e.child] for e in edges]
+                mean[n] = weighted_mean([weight(e.move) for e in edges],
+                                        [e.move.cost + mc for e, mc in zip(edges, ms, strict=True)
+                                         if mc is not None])
+    return choice, mean
 
 
 def weighted_mean(weights: list[Fraction], xs: list[Cost]) -> Cost:
@@ -305,10 +493,3 @@ def weighted_mean(weights: list[Fraction], xs: list[Cost]) -> Cost:
 def speaks(m: Move) -> bool:
     """A communication (§7 ties): ``inform``, ``ask``, or a move that speaks while acting."""
     return m.kind in (INFORM, ASK) or (m.kind in (ACTION, WAIT) and m.atoms != 0)
-
-
-def _through(m: Move, t: Tally, need_mean: bool) -> Tally:
-    """The child's tally seen from its parent, one move ``m`` further up."""
-    return Tally(t.comms + (1 if speaks(m) else 0), t.waits + (1 if m.waits else 0),
-                 t.leaves, t.length + t.leaves, m.cost + t.worst,
-                 m.cost + t.mean if need_mean and t.mean is not None else None)

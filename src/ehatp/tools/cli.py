@@ -13,20 +13,14 @@ import json
 import sys
 import time
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
-from rich.console import Console
-from rich.live import Live
-from rich.text import Text
 
 from .. import __version__
 from ..model.options import ObjectiveKind
-from ..model.problem import Problem, load
+from ..model.problem import Problem, load, parse_size
 from ..policy_format import Policy
-from ..search.andor import Stats
-from ..search.planner import Result, solve
-from . import bench as bench_mod
 from .common import (
     EXIT_NO_POLICY,
     EXIT_OK,
@@ -36,7 +30,15 @@ from .common import (
     read_policy,
     user_errors,
 )
-from .show import cost_lines, plain, policy_lines, print_notes, print_rich
+
+# rich, the search and the bench tables load when a command needs them (start-up time)
+if TYPE_CHECKING:
+    from rich.console import Console
+    from rich.live import Live
+    from rich.text import Text
+
+    from ..search.andor import Stats
+    from ..search.planner import Result
 
 app = typer.Typer(
     name="ehatp",
@@ -73,14 +75,19 @@ def load_policy(path: Path, problem: Path | None = None, *, counts: bool = True)
 
 def stderr_console() -> Console | None:
     """A console for live progress, or None when stderr is not a terminal (stay quiet)."""
-    return Console(stderr=True) if sys.stderr.isatty() else None
+    if not sys.stderr.isatty():
+        return None
+    from rich.console import Console
+
+    return Console(stderr=True)
 
 
 # --- progress --------------------------------------------------------------------------------
 
 
 class LiveProgress:
-    """Search progress on the terminal (states/s, worlds, elapsed), cleared when done."""
+    """Progress on the terminal through every phase of ``solve`` (grounding, search with its
+    states/s, worlds and frontier, values, extraction, writing), cleared when done."""
 
     def __init__(self, console: Console, label: str) -> None:
         self.console, self.label = console, label
@@ -91,6 +98,8 @@ class LiveProgress:
             return
         text = self.render(stats, frontier)
         if self.live is None:
+            from rich.live import Live
+
             self.live = Live(text, console=self.console, transient=True, refresh_per_second=4,
                              redirect_stdout=False, redirect_stderr=False)
             self.live.start()
@@ -98,6 +107,14 @@ class LiveProgress:
             self.live.update(text)
 
     def render(self, stats: Stats, frontier: int) -> Text:
+        from rich.text import Text
+
+        if stats.phase == "grounding":
+            return Text.assemble((f"{self.label} ", "bold"), "grounding the problem · ",
+                                 f"{stats.time_s:.1f} s")
+        if stats.phase != "search":
+            return Text.assemble((f"{self.label} ", "bold"), (stats.phase, "cyan"),
+                                 f" · {stats.distinct:,} distinct states · {stats.time_s:.1f} s")
         rate = stats.generated / stats.time_s if stats.time_s else 0.0
         return Text.assemble(
             (f"{self.label} ", "bold"),
@@ -141,9 +158,19 @@ def _root(
 # --- solve -----------------------------------------------------------------------------------
 
 
+def solve(problem: Problem, **kwargs: Any) -> Result:
+    """:func:`ehatp.solve`; the search loads on first use, not when the program starts."""
+    from ..search.planner import solve as planner_solve
+
+    return planner_solve(problem, **kwargs)
+
+
 def with_objective(prob: Problem, kind: ObjectiveKind | None) -> Problem:
     """Print the problem's notes; ``--objective`` overrides its ``[objective] kind``."""
-    print_notes(prob)
+    if prob.notes:
+        from .show import print_notes
+
+        print_notes(prob)
     if kind is None:
         return prob
     return dataclasses.replace(prob, objective=dataclasses.replace(prob.objective, kind=kind))
@@ -158,8 +185,14 @@ def solve_cmd(
         "--out", "-o", help="Where to write the policy JSON (default: PROBLEM-NAME.policy.json "
                             "in the current directory).", show_default=False)] = None,
     timeout: Annotated[float | None, typer.Option(
-        "--timeout", min=0.0, help="Stop searching after this many seconds (default: the "
+        "--timeout", min=0.0, help="Stop after this many seconds, whatever the work under "
+                                   "way: search, values, extraction or writing (default: the "
                                    "problem's limits.timeout, else none).",
+        show_default=False)] = None,
+    max_memory: Annotated[str | None, typer.Option(
+        "--max-memory", metavar="SIZE", help="Stop before the process uses more resident "
+                                             "memory than this, e.g. 2G or 512M (default: the "
+                                             "problem's limits.max_memory, else none).",
         show_default=False)] = None,
     max_states: Annotated[int | None, typer.Option(
         "--max-states", min=1, help="Stop after this many distinct states (default: the "
@@ -179,29 +212,50 @@ def solve_cmd(
     Prints a summary: solved or why not, states generated/distinct, the largest number of
     worlds the human entertains (|W|), leaves, the policy's worst-case and expected cost (and
     which one was minimised), communications and time.
-    Exit 0 solved; 1 no policy exists or a limit stopped the search (the best policy found so
-    far is still written, marked not optimal); 2 bad input.
+    Exit 0 solved; 1 no policy exists or a limit stopped the work (one line says which; the
+    best policy found so far, if any, is still written, marked not optimal); 2 bad input.
     """
+    t0 = time.perf_counter()
+    from ..search.limits import Budget, LimitReached
+
+    memory: int | None = None
+    if max_memory is not None:
+        try:
+            memory = parse_size(max_memory)
+        except ValueError as e:
+            die(f"--max-memory {max_memory}: {e}; write e.g. 2G, 512M or a number of bytes")
     prob = with_objective(load_problem(problem), objective)
+    limits = prob.limits
+    budget = Budget(limits.timeout if timeout is None else timeout,
+                    limits.max_memory if memory is None else memory, start=t0)
     console = stderr_console()
     live = LiveProgress(console, prob.name) if console is not None else None
-    t0 = time.perf_counter()
+    result: Result | None = None
+    target = out if out is not None else Path(f"{problem.stem}.policy.json")
+    written = False
     try:
         with user_errors(problem):
-            result = solve(prob, timeout=timeout, max_states=max_states, max_depth=max_depth,
-                           progress=live)
+            result = solve(prob, max_states=max_states, max_depth=max_depth, progress=live,
+                           budget=budget)
+        if result.policy is not None:
+            budget.phase = "writing"
+            try:
+                budget.check()
+                result.policy.write(target)
+                written = True
+            except OSError as e:
+                die(f"{target}: cannot write the policy ({e.strerror or e}); choose another "
+                    "--out")
+            except (LimitReached, MemoryError) as e:
+                stop = e if isinstance(e, LimitReached) else budget.out_of_memory()
+                target.unlink(missing_ok=True)  # never leave half a policy behind
+                result = dataclasses.replace(result, status=stop.status, policy=None,
+                                             reason=stop.reason, optimal=False)
     finally:
         if live is not None:
             live.close()
+    assert result is not None
     wall_ms = (time.perf_counter() - t0) * 1000
-    target = out if out is not None else Path(f"{problem.stem}.policy.json")
-    written = False
-    if result.policy is not None:
-        try:
-            result.policy.write(target)
-        except OSError as e:
-            die(f"{target}: cannot write the policy ({e.strerror or e}); choose another --out")
-        written = True
     _summary(prob, result, wall_ms, target if written else None)
     raise typer.Exit(EXIT_OK if result.status == "solved" else EXIT_NO_POLICY)
 
@@ -224,6 +278,8 @@ def _summary(prob: Problem, result: Result, wall_ms: float, written: Path | None
     ]
     pol = result.policy
     if pol is not None:
+        from .show import cost_lines
+
         rows += [("leaves", pol.leaves), *cost_lines(pol),
                  ("communications", pol.communications)]
     rows.append(("time", f"{st.get('time_ms', 0):,} ms search, {wall_ms:,.1f} ms in all"))
@@ -265,8 +321,12 @@ def show_cmd(
     The file's structure is checked first (exit 2 if it was edited into something else).
     """
     pol = load_policy(policy, problem)
+    from .show import plain, policy_lines, print_rich
+
     lines = policy_lines(pol, tree=tree, timelines=timelines, details=details)
     if sys.stdout.isatty():
+        from rich.console import Console
+
         print_rich(lines, Console())
     else:
         typer.echo(plain(lines), nl=False)
@@ -328,6 +388,8 @@ def bench_table1(
     stored figures, the published times and the authors' prototype without tree copying
     (measured side by side on 2026-11-22). Exit 1 if an instance is missing or not solved.
     """
+    from . import bench as bench_mod
+
     if only:
         known = {bench_mod.instance_key(r.instance) for r in bench_mod.TABLE1}
         unknown = [o for o in only if bench_mod.instance_key(o) not in known]
@@ -358,6 +420,8 @@ def bench_table1(
             except OSError as e:
                 die(f"{json_out}: cannot write ({e.strerror or e}); choose another --json file")
     if str(json_out) != "-":
+        from rich.console import Console
+
         con = Console() if sys.stdout.isatty() else None
         table = bench_mod.rich_table(rows)
         # a crushed table is worse than a wrapped plain one on a narrow terminal
