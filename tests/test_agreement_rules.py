@@ -77,7 +77,7 @@ def test_a_divergence_hiding_that_the_robot_is_done_is_relevant() -> None:
     p = fridge(after=("H go(lab, hall)", "R chill"))
     r = ehatp.solve(p)
     assert r.policy is not None
-    assert "inform(cold)" in {n.action for n in r.policy.nodes}
+    assert "inform(cold)" in {m.action for _, m in r.policy.edges()}
     report = ehatp.validate(p, r.policy)
     assert report.ok, report.message
 
@@ -110,7 +110,7 @@ def test_inform_of_an_atom_with_arguments_records_whole_literals() -> None:
                 objects={"node": ["x", "y"]}, beliefs=[([], ["link(x, y)"])], starts="robot")
     r = ehatp.solve(p)
     assert r.policy is not None
-    told = [n for n in r.policy.nodes if n.kind == "inform"]
+    told = [m for _, m in r.policy.edges() if m.kind == "inform"]
     assert told and told[0].name == "inform" and told[0].args == ["link(x, y)"]
     assert ehatp.validate(p, r.policy).ok
     # the validator checks name and args too

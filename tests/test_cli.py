@@ -191,9 +191,14 @@ def test_show_prints_tree_and_timelines(p2_policy: Path) -> None:
     out = r.stdout
     assert "\x1b[" not in out  # plain text when not a terminal
     assert "Tree" in out and "Timelines" in out
-    for n in pol.nodes:  # every step, in the domain's vocabulary, with its worlds
-        assert re.search(rf"#{n.id}\s+{re.escape(n.agent or '')}\s+"
-                         rf"{re.escape(n.action)}\s+W={n.worlds}", out), n
+    for n in pol.nodes:  # every node once, with its worlds
+        assert len(re.findall(rf"#{n.id}\s+.*\sW={n.worlds}\b", out)) == 1, n
+    for _, m in pol.edges():  # every move, in the domain's vocabulary
+        assert re.search(rf"{re.escape(m.agent)}\s+{re.escape(m.action)}\s+"
+                         rf"(W=|-> see node {m.to}\b)", out), m
+    # a node reached by several paths is printed once; the other moves into it refer to it
+    refs = re.findall(r"-> see node (\d+)", out)
+    assert refs and len(refs) == sum(len(n.moves) for n in pol.nodes) - len(pol.nodes) + 1
     assert len(re.findall(r"GOAL$", out, re.M)) == sum(n.goal for n in pol.nodes)
     assert "H may do one of" in out and "apart" in out
     # one timeline per branch, with lanes while the agents are apart
@@ -205,11 +210,11 @@ def test_show_marks_communication(tmp_path: Path) -> None:
     out = tmp_path / "p4.json"
     assert invoke("solve", CUBES / "p4.toml", "--out", out).exit_code == 0
     pol = Policy.read(out)
-    comms = [n for n in pol.nodes if n.kind in ("inform", "ask")]
+    comms = [m for _, m in pol.edges() if m.kind in ("inform", "ask")]
     shown = invoke("show", out, "--no-timelines").stdout
-    assert len(re.findall(r"W=\d+.*  COMM\b", shown)) == len(comms)
-    for n in comms:
-        assert n.action in shown
+    assert len(re.findall(r"  COMM\b", shown)) == len(comms)
+    for m in comms:
+        assert m.action in shown
 
 
 def test_show_options(p2_policy: Path) -> None:

@@ -28,7 +28,7 @@ def test_option_solves_what_the_default_cannot(name: str, option: str, said: str
     r = ehatp.solve(p)
     assert r.policy is not None and r.optimal, r.reason
     assert r.policy.communications == 1
-    assert said in {n.action for n in r.policy.nodes}
+    assert said in {m.action for _, m in r.policy.edges()}
     report = ehatp.validate(p, r.policy)
     assert report.ok, report.message
     default = replace(p, communication=replace(p.communication, **{
@@ -41,8 +41,8 @@ def test_speech_opening_comes_before_the_humans_first_move() -> None:
     p = ehatp.load(EX / "starts-on-false-belief.toml")
     r = ehatp.solve(p)
     assert r.policy is not None
-    first = r.policy.children(r.policy.root)
-    assert [(n.agent, n.kind) for n in first] == [("R", "inform")]
+    first = r.policy.root.moves
+    assert [(m.agent, m.kind) for m in first] == [("R", "inform")]
 
 
 def test_inform_at_a_distance_is_heard_while_apart() -> None:

@@ -81,10 +81,10 @@ def test_no_human_option_acts_on_a_cube_of_origin_mt(name: str) -> None:
     # every human node of the solved policy
     r = ehatp.solve(p)
     assert r.policy is not None
-    human = [n for n in r.policy.nodes if n.agent == "H"]
+    human = [m for _, m in r.policy.edges() if m.agent == "H"]
     assert human
-    for n in human:
-        assert not mentions(n.action, mine), (name, n.id, n.action)
+    for m in human:
+        assert not mentions(m.action, mine), (name, m.to, m.action)
     # and every human move the search ever generated, not only those the policy kept
     out = search(ground_problem(p))
     for i, es in enumerate(out.graph.states):
@@ -109,7 +109,7 @@ def test_human_reach_from_toml(tmp_path: Path) -> None:
     assert labels(sem, es) == ["pick(r)", "move(mt, ot)", "pass"]
     r = ehatp.solve(ehatp.load(f))
     assert r.policy is not None and r.policy.domain == "cubes-reach-any"
-    assert any(n.action == "pick(r)" and n.agent == "H" for n in r.policy.nodes)
+    assert any(m.action == "pick(r)" and m.agent == "H" for _, m in r.policy.edges())
     f.write_text(text.replace('human_reach = "fetched"', 'human_reach = "robot"'),
                  encoding="utf-8")
     with pytest.raises(InputError, match="human_reach must be one of 'fetched', 'any'"):

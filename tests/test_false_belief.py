@@ -7,14 +7,14 @@ from __future__ import annotations
 from pathlib import Path
 
 import ehatp
-from ehatp.policy_format import Policy, PolicyNode
+from ehatp.policy_format import PathStep, Policy
 
 from .scenarios import walk
 
 SA = Path(__file__).resolve().parents[1] / "examples" / "sally-anne"
 
 
-def leave_first(policy: Policy) -> list[PolicyNode]:
+def leave_first(policy: Policy) -> list[PathStep]:
     return next(b for b in policy.branches() if b[1].action == "go(room, street)")
 
 

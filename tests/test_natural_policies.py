@@ -64,7 +64,7 @@ def _robot_idles(policy: Policy) -> list[str]:
     for n in policy.nodes:
         if n.to_move != "R" or not n.copresent or not n.robot_agenda:
             continue
-        (c,) = policy.children(n)
+        (c,) = n.moves
         if c.kind == "wait" and _can_act(n):
             out.append(f"node {n.id}: wait with {n.robot_agenda}")
     return out
@@ -84,10 +84,11 @@ def test_fair_robot_washes_the_needed_glass_after_the_reunion_and_never_idles() 
     assert ehatp.validate(p, r.policy).ok
     assert _robot_idles(r.policy) == []
     # right after the human is back, with g1 still dirty, the robot washes g1 first
-    back = [n for n in r.policy.nodes if n.action == "go(pantry, kitchen)"]
+    back = [r.policy.nodes[m.to] for _, m in r.policy.edges()
+            if m.action == "go(pantry, kitchen)"]
     assert back
     for n in back:
-        (c,) = r.policy.children(n)
+        (c,) = n.moves
         if "clean(g1)" not in n.state:
             assert c.action == "wash(g1)", (n.id, c.action)
 

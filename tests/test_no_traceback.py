@@ -259,9 +259,12 @@ def p1_policy(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.mark.parametrize(("edit", "expect"), [
-    (lambda d: d.update(leaves=99), "leaves: says 99, but the tree has"),
+    (lambda d: d.update(leaves=99), "leaves: says 99, but the policy has"),
     (lambda d: d["nodes"][1].update(worlds="two"), "nodes[1].worlds: must be a whole number"),
-    (lambda d: d["nodes"][1].update(agent="Z"), "nodes[1].agent"),
+    (lambda d: d["nodes"][1]["moves"][0].update(agent="Z"), "nodes[1].moves[0].agent"),
+    (lambda d: d["nodes"][1]["moves"][0].update(cost="1"), "nodes[1].moves[0].cost: must be"),
+    (lambda d: d["nodes"][1]["moves"][0].update(to=0), "nodes[1].moves[0].to"),
+    (lambda d: d["nodes"][1].update(moves=7), "nodes[1].moves: moves must be a list"),
     (lambda d: d.update(nodes="none"), "nodes must be a list"),
     (lambda d: d["nodes"].__setitem__(2, 5), "nodes[2]: a node must be an object"),
     (lambda d: d.update(stats=[]), "stats must be an object"),

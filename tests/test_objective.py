@@ -73,7 +73,7 @@ def solved(p: Problem) -> tuple[Result, Policy]:
 
 
 def robot_first(policy: Policy) -> str:
-    return policy.nodes[policy.nodes[0].children[0]].action
+    return policy.root.moves[0].action
 
 
 # By hand. After the robot's action the human (co-present, not after a forced wait) may also
@@ -152,10 +152,11 @@ def test_a_move_that_speaks_while_acting_is_told_and_counted() -> None:
                 starts="robot", communication=Communication(speech=Speech.WITH_ACTION))
     for kind in ObjectiveKind:
         _, pol = solved(with_kind(p, kind))
-        first = pol.nodes[pol.nodes[0].children[0]]
+        first = pol.root.moves[0]
         assert (first.kind, first.action) == ("action", "inform(not secret(b)) + set_lamp(a)")
         assert first.told == ["not secret(b)"] and first.name == "set_lamp"
-        assert [n.told for n in pol.nodes if n is not first] == [[]] * (len(pol.nodes) - 1)
+        others = [m.told for _, m in pol.edges() if m is not first]
+        assert others == [[]] * len(others)
         assert pol.communications == 1
 
 

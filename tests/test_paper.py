@@ -56,24 +56,24 @@ def test_robot_informs_that_box2_is_empty_before_the_human_places_w() -> None:
     assert r.policy is not None and r.policy.after == BACK
     root = r.policy.root
     assert root.worlds == 2
-    first = r.policy.children(root)[0]
+    first = r.policy.steps(root)[0]
     assert first.action == "inform(empty(box2))" and first.worlds == 1
-    assert [c.action for c in r.policy.children(first)] == ["place(w, box2)", "pass"]
+    assert [c.action for c in r.policy.steps(first.node)] == ["place(w, box2)", "pass"]
 
 
 def test_annoying_robot_waits_for_the_question_and_answers_it() -> None:
     r = ehatp.solve(ehatp.load(CUBES / "qualitative-ask.toml"))
     assert r.policy is not None
-    first = r.policy.children(r.policy.root)[0]
+    first = r.policy.steps(r.policy.root)[0]
     assert first.action == "wait"
-    asks = {c.action: c for c in r.policy.children(first)}
+    asks = {c.action: c for c in r.policy.steps(first.node)}
     assert set(asks) == {"ask(can_put(w, box1))", "ask(can_put(w, box2))"}
     for ask in asks.values():
         assert ask.worlds == 1
         branch = [ask.action]
         n = ask
-        while n.children:
-            n = r.policy.children(n)[0]
+        while n.node.moves:
+            n = r.policy.steps(n.node)[0]
             branch.append(n.action)
         assert branch[-1] == "place(w, box2)"
 

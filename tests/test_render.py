@@ -17,10 +17,11 @@ import typer
 from typer.testing import CliRunner
 
 import ehatp
-from ehatp.policy_format import Policy
+from ehatp.policy_format import Policy, PolicyMove, PolicyNode
 from ehatp.tools import render as rd
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples" / "cubes"
+V1 = Path(__file__).resolve().parent / "data" / "p4-v1.json"  # written by format version 1
 NAMES = ["p1", "p2", "p3", "p4", "p5", "p6"]
 NODE_STMT = re.compile(r"^\s*n(\d+) \[", re.M)
 EDGE_STMT = re.compile(r"^\s*n(\d+) -> n(\d+)", re.M)
@@ -78,54 +79,105 @@ def test_dot_styles_tell_kinds_apart(policy_files: dict[str, Path]) -> None:
     text, _ = rd.render(policy_files["p4"], rd.Format.dot)
     lines = {int(m.group(1)): m.string[m.start():m.string.index("\n", m.start())]
              for m in NODE_STMT.finditer(text)}
+    into: dict[int, list[Any]] = {}
+    for _, m in policy.edges():
+        into.setdefault(m.to, []).append(m)
     human = policy.agents["human"]
     seen = set()
+    labelled = 0
     for n in policy.nodes:
         line = lines[n.id]
         assert f"{n.worlds} world" in line  # every node shows how many worlds
-        assert n.action in line
-        if n.kind in ("inform", "ask"):
+        assert f"k={n.k}/{policy.K}" in line  # the unseen-turn counter against K
+        assert ("peripheries=2" in line) == n.goal
+        if n.id == 0:
+            continue
+        entered = into[n.id]
+        kinds = {m.kind for m in entered}
+        if kinds <= {"inform", "ask"}:
             assert "shape=hexagon" in line
             seen.add("comm")
-        elif n.kind == "action":
-            assert ("shape=ellipse" if n.agent == human else "shape=box") in line
-            seen.add(n.agent)
-        assert ("peripheries=2" in line) == n.goal
+        elif kinds == {"action"}:
+            assert ("shape=ellipse" if entered[0].agent == human else "shape=box") in line
+            seen.add(entered[0].agent)
+        if len({m.action for m in entered}) == 1:
+            assert entered[0].action in line  # one way in: the node shows the move
+        else:  # several: each edge shows its own
+            labelled += 1
+            for m in entered:
+                assert re.search(rf"-> n{n.id} \[label=\"{re.escape(m.action)}\"", text)
     assert seen == {"comm", *policy.agents.values()}
+    assert labelled  # P4: both of the human's questions lead to one state
 
 
-def test_share_identical_subtrees(policy_files: dict[str, Path]) -> None:
+def test_shared_nodes_are_drawn_once_with_an_edge_per_parent(
+        policy_files: dict[str, Path]) -> None:
     policy = Policy.read(policy_files["p4"])
-    hashes = rd.subtree_hashes(policy)
+    view = rd.plan_view(policy, max_nodes=None, share=False)
+    assert sorted(view.nodes) == list(range(len(policy.nodes))) and not view.notes
+    parents: dict[int, set[int]] = {}
+    for a, b, _ in view.edges:
+        parents.setdefault(b, set()).add(a)
+    assert max(len(p) for p in parents.values()) > 1
+    # a shared node says how many copies the tree unfolding would hold
+    copies = policy.path_counts()
+    assert view.stands_for == {i: c for i, c in enumerate(copies) if c > 1}
+    text = rd.to_dot(policy, view).source
+    for i, c in view.stands_for.items():
+        assert re.search(rf"^\s*n{i} \[label=\"[^\"]*\(×{c}\)", text, re.M)
+
+
+def test_share_identical_subgraphs() -> None:
+    # a version 1 file holds the tree unfolding: its copies are identical subtrees
+    policy = Policy.load(V1)
+    hashes = rd.subgraph_hashes(policy)
     view = rd.plan_view(policy, max_nodes=None, share=True)
     assert len(view.nodes) == len(set(hashes)) < len(policy.nodes)
-    # every policy node is drawn through a node with the very same subtree
+    # every policy node is drawn through a node with the very same subgraph
     assert {hashes[i] for i in view.nodes} == set(hashes)
-    assert any("identical subtrees" in note for note in view.notes)
+    assert any("identical subgraphs" in note for note in view.notes)
     assert any(k > 1 for k in view.stands_for.values())
     text = rd.to_dot(policy, view).source
     assert len(NODE_STMT.findall(text)) == len(view.nodes)
-    assert "collapsed: identical subtrees" in text  # the note is in the graph label
+    assert "collapsed: identical subgraphs" in text  # the note is in the graph label
     # a shared node has several parents
     parents: dict[int, int] = {}
-    for _, b in view.edges:
+    for _, b, _ in view.edges:
         parents[b] = parents.get(b, 0) + 1
     assert max(parents.values()) > 1
 
 
-def test_over_budget_collapses_and_says_so(policy_files: dict[str, Path]) -> None:
-    result = run(policy_files["p4"], "--max-nodes", "40")
+def test_over_budget_collapses_and_says_so() -> None:
+    result = run(V1, "--max-nodes", "40")
     assert result.exit_code == 0, result.output
-    assert "collapsed: identical subtrees" in result.stderr
-    assert "collapsed: identical subtrees" in result.stdout
-    assert len(NODE_STMT.findall(result.stdout)) <= 100
+    assert "collapsed: identical subgraphs" in result.stderr
+    assert "collapsed: identical subgraphs" in result.stdout
+    assert len(NODE_STMT.findall(result.stdout)) <= 40
+
+
+def _hidden_below(policy: Policy, view: rd.View) -> dict[int, set[int]]:
+    drawn = set(view.nodes)
+    out: dict[int, set[int]] = {}
+    for i in view.folded:
+        seen: set[int] = set()
+        stack = [i]
+        while stack:
+            for c in policy.nodes[stack.pop()].children:
+                if c not in seen and c not in drawn:
+                    seen.add(c)
+                    stack.append(c)
+        out[i] = seen
+    return out
 
 
 def test_depth_cap_folds_into_stubs(policy_files: dict[str, Path]) -> None:
     policy = Policy.read(policy_files["p3"])
     view = rd.plan_view(policy, max_depth=3, max_nodes=None, share=False)
     assert view.folded and any("depth 3" in note for note in view.notes)
-    assert len(view.nodes) + sum(view.folded.values()) == len(policy.nodes)
+    # each stub counts the nodes below it that are not drawn; together they are the rest
+    hidden = _hidden_below(policy, view)
+    assert view.folded == {i: len(s) for i, s in hidden.items()}
+    assert set(view.nodes) | set().union(*hidden.values()) == set(range(len(policy.nodes)))
     text = rd.to_dot(policy, view).source
     assert len(re.findall(r"^\s*more\d+ \[", text, re.M)) == len(view.folded)
     result = run(policy_files["p3"], "--max-depth", "3")
@@ -136,11 +188,15 @@ def test_node_budget_keeps_siblings_together(policy_files: dict[str, Path]) -> N
     policy = Policy.read(policy_files["p6"])
     view = rd.plan_view(policy, max_nodes=25, share=False)
     assert len(view.nodes) <= 25
-    assert len(view.nodes) + sum(view.folded.values()) == len(policy.nodes)
+    hidden = _hidden_below(policy, view)
+    assert set(view.nodes) | set().union(*hidden.values()) == set(range(len(policy.nodes)))
     drawn = set(view.nodes)
+    edges = {(a, b) for a, b, _ in view.edges}
     for i in drawn:
         kids = set(policy.nodes[i].children)
-        assert kids <= drawn or (i in view.folded and not kids & drawn)
+        # every child drawn with its edge, or none of its edges and a stub
+        assert {(i, k) for k in kids} <= edges or (i in view.folded and not {
+            (i, k) for k in kids} & edges)
 
 
 # --------------------------------------------------------------------------- SVG and errors
@@ -180,13 +236,19 @@ def test_bad_input_is_one_line_exit_2(tmp_path: Path) -> None:
         assert str(path) in lines[0] and what in lines[0] and "ehatp solve" in lines[0]
 
 
-def test_cyclic_children_are_rejected(policy_files: dict[str, Path], tmp_path: Path) -> None:
+def test_cyclic_moves_are_rejected(policy_files: dict[str, Path], tmp_path: Path) -> None:
     data = json.loads(policy_files["p1"].read_text(encoding="utf-8"))
-    data["nodes"][1]["children"].append(0)
+    back = dict(data["nodes"][1]["moves"][0])
+    node = data["nodes"][back["to"]]
+    node["moves"].append({**back, "to": 1})  # back up to node 1
     bad = tmp_path / "cyclic.json"
     bad.write_text(json.dumps(data), encoding="utf-8")
     result = run(bad)
-    assert result.exit_code == 2 and "children" in result.stderr
+    assert result.exit_code == 2 and "cycle through node" in result.stderr
+    data["nodes"][1]["moves"].append({**back, "to": 0})  # into the root
+    bad.write_text(json.dumps(data), encoding="utf-8")
+    result = run(bad)
+    assert result.exit_code == 2 and "moves[1].to" in result.stderr
 
 
 # --------------------------------------------------------------------------- HTML
@@ -273,18 +335,58 @@ def browser(monkeypatch: pytest.MonkeyPatch) -> Iterator[Any]:
         shutil.rmtree(profile, ignore_errors=True)
 
 
+def first_moves(policy: Policy) -> dict[int, Any]:
+    """The move by which the depth-first walk first reaches each node (the explorer draws a
+    node there, and a reference to it at every other move into it)."""
+    out: dict[int, Any] = {}
+    stack: list[tuple[Any, int]] = [(None, 0)]
+    while stack:
+        move, i = stack.pop()
+        if i in out:
+            continue
+        out[i] = move
+        stack.extend((m, m.to) for m in reversed(policy.nodes[i].moves))
+    return out
+
+
+def open_page(browser: Any, page: Path) -> None:
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    browser.get(page.as_uri())
+    WebDriverWait(browser, 20).until(
+        lambda d: d.find_element(By.TAG_NAME, "body").get_attribute("data-ready") == "true")
+
+
+# the smallest text drawn in the tree, in screen pixels: font size times the drawing's scale
+SMALLEST_TEXT = """
+  let least = Infinity, shown = 0;
+  const pane = document.getElementById("tree").getBoundingClientRect();
+  for (const t of document.querySelectorAll("#tree text")) {
+    const r = t.getBoundingClientRect();
+    if (r.right < pane.left || r.left > pane.right || r.bottom < pane.top || r.top > pane.bottom)
+      continue;
+    shown++;
+    least = Math.min(least, parseFloat(getComputedStyle(t).fontSize) * t.getScreenCTM().a);
+  }
+  return [least, shown];
+"""
+
+
 def test_click_node_and_read_world_table(policy_files: dict[str, Path], tmp_path: Path,
                                          browser: Any) -> None:
     from selenium.webdriver.common.by import By
-    from selenium.webdriver.support.ui import WebDriverWait
 
     policy = Policy.read(policy_files["p4"])
     page = tmp_path / "p4.html"
     assert run(policy_files["p4"], "--format", "html", "--out", page).exit_code == 0
-    browser.get(page.as_uri())
-    WebDriverWait(browser, 10).until(
-        lambda d: d.find_element(By.TAG_NAME, "body").get_attribute("data-ready") == "true")
+    open_page(browser, page)
     assert len(browser.find_elements(By.CSS_SELECTOR, "[data-node-id]")) == len(policy.nodes)
+    browser.find_element(By.ID, "fit").click()  # the whole tree in view, to click anywhere
+    # every other move into a shared node is a reference to its first copy
+    refs = browser.find_elements(By.CSS_SELECTOR, "[data-ref-id]")
+    moves = sum(len(n.moves) for n in policy.nodes)
+    assert len(refs) == moves - (len(policy.nodes) - 1) > 0
 
     # a node where the human cannot tell several worlds apart
     node = max(policy.nodes, key=lambda n: (n.worlds, -n.id))
@@ -305,13 +407,17 @@ def test_click_node_and_read_world_table(policy_files: dict[str, Path], tmp_path
         want = {a: "T" if (a in diff["true"] or (a in truth and a not in diff["false"]))
                 else "F" for a in expected_atoms}
         assert got == want
-    assert browser.find_element(By.ID, "fact-k").text.startswith(str(node.k))
+    move = first_moves(policy)[node.id]
+    assert browser.find_element(By.ID, "fact-k").text.startswith(f"{node.k} of K = {policy.K}")
     assert browser.find_element(By.ID, "fact-worlds").text == str(node.worlds)
-    assert browser.find_element(By.ID, "fact-cost").text == str(node.cost)
-    assert browser.find_element(By.ID, "fact-action").text.startswith(node.action)
+    assert browser.find_element(By.ID, "fact-cost").text == str(move.cost)
+    assert browser.find_element(By.ID, "fact-action").text.startswith(move.action)
     copresent = browser.find_element(By.ID, "fact-copresent").text
     assert copresent.startswith("together" if node.copresent else "apart")
     assert f"node={node.id}" in browser.current_url
+    # the label gives the unseen turns against K, not a "K=" that reads as the bound
+    sub = browser.find_element(By.CSS_SELECTOR, f'[data-node-id="{node.id}"] text.sub').text
+    assert f"k={node.k}/{policy.K}" in sub and "K=" not in sub
 
     # the branch through it, as a timeline with parallel lanes while the agents are apart
     lanes = browser.find_elements(By.CSS_SELECTOR, "#timeline .tl-parallel .tl-lane")
@@ -319,17 +425,83 @@ def test_click_node_and_read_world_table(policy_files: dict[str, Path], tmp_path
     current = browser.find_element(By.CSS_SELECTOR, "#timeline .tl-step.current")
     assert current.get_attribute("data-step-node") == str(node.id)
 
+    # a reference leads to the first copy of its node
+    ref = refs[0]
+    target = ref.get_attribute("data-ref-id")
+    ref.click()
+    assert browser.find_element(By.CSS_SELECTOR, ".node.selected").get_attribute(
+        "data-node-id") == target
+
     # fold and unfold the whole tree at the root
     browser.find_element(By.CSS_SELECTOR, '[data-toggle-id="0"]').click()
     assert len(browser.find_elements(By.CSS_SELECTOR, "[data-node-id]")) == 1
     browser.find_element(By.CSS_SELECTOR, '[data-toggle-id="0"]').click()
     assert len(browser.find_elements(By.CSS_SELECTOR, "[data-node-id]")) == len(policy.nodes)
 
-    # communications are listed and jump to their node
+    # communications are listed, each move once, and jump to their node
     comms = browser.find_elements(By.CSS_SELECTOR, "#comm-list [data-goto]")
-    assert len(comms) == policy.communications > 0
+    assert len(comms) == sum(m.kind in ("inform", "ask") for _, m in policy.edges()) > 0
     comms[0].click()
     assert browser.find_element(By.CSS_SELECTOR, ".node.selected.comm")
 
+    errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+    assert errors == []
+
+
+def big_policy(levels: int, width: int) -> Policy:
+    """A synthetic policy graph: the human chooses between two moves at every node, each
+    leading one level down (node j to 2j and 2j + 1, modulo the level's width, at most
+    ``width``), so nodes are shared and the tree unfolding has 2 ** levels branches."""
+    sizes = [min(2 ** level, width) for level in range(levels + 1)]
+    first = [sum(sizes[:level]) for level in range(levels + 1)]  # id of each level's node 0
+    nodes = []
+    for level, size in enumerate(sizes):
+        for j in range(size):
+            i = first[level] + j
+            goal = level == levels
+            nodes.append(PolicyNode(
+                id=i, copresent=level % 3 != 2, k=level % 3, worlds=1 + i % 3, divergence=[],
+                world_diffs=[{"true": [], "false": []}] * (1 + i % 3), state=[f"at(p{level})"],
+                robot_agenda=[], human_agenda=[] if goal else ["walk"],
+                to_move=None if goal else "H", value=levels - level, goal=goal,
+                moves=[] if goal else [
+                    PolicyMove("H", "action", f"go(b{j}, {d})", "go", [f"b{j}", str(d)], 1,
+                               first[level + 1] + (2 * j + d) % sizes[level + 1])
+                    for d in range(2)]))
+    policy = Policy("big", "synthetic", {"robot": "R", "human": "H"}, 2,
+                    {"inform": 1, "ask": 1, "wait": 1, "pass": 1, "actions": {}}, nodes,
+                    levels, 0, 0)
+    policy.leaves = policy.count_branches()
+    return policy
+
+
+@pytest.mark.parametrize("name", ["p2", "big"])
+def test_explorer_opens_readable_with_a_timeline(policy_files: dict[str, Path], tmp_path: Path,
+                                                 browser: Any, name: str) -> None:
+    from selenium.webdriver.common.by import By
+
+    if name == "big":
+        source = tmp_path / "big.json"
+        big_policy(100, 300).write(source)
+    else:
+        source = policy_files[name]
+    policy = Policy.load(source)
+    page = tmp_path / f"{name}.html"
+    assert run(source, "--format", "html", "--out", page).exit_code == 0
+    open_page(browser, page)
+    least, shown = browser.execute_script(SMALLEST_TEXT)
+    assert shown > 0 and least >= 10, (least, shown)
+    # the root is in view, and so are its details and the branch along first choices
+    root = browser.find_element(By.CSS_SELECTOR, '[data-node-id="0"]')
+    assert root.is_displayed() and browser.execute_script(
+        "const r = arguments[0].getBoundingClientRect(), p = document.getElementById('tree')"
+        ".getBoundingClientRect(); return r.top >= p.top && r.bottom <= p.bottom && "
+        "r.left >= p.left && r.right <= p.right;", root)
+    assert browser.find_element(By.ID, "details-body").is_displayed()
+    steps = browser.find_elements(By.CSS_SELECTOR, "#timeline .tl-step")
+    first = next(policy.iter_branches())
+    # (steps taken apart are grouped in lanes, one per agent)
+    assert sorted(int(s.get_attribute("data-step-node")) for s in steps) == sorted(
+        n.id for n in first[1:])
     errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
     assert errors == []

@@ -47,7 +47,7 @@ def test_policy_json_round_trips_and_is_versioned(tmp_path: Path) -> None:
     f = tmp_path / "p.json"
     r.policy.write(f)
     data = json.loads(f.read_text())
-    assert data["format"] == "ehatp-policy" and data["version"] == 1
+    assert data["format"] == "ehatp-policy" and data["version"] == 2
     assert Policy.read(f).to_json() == f.read_text()
     node = data["nodes"][0]
     assert node["worlds"] == 2 and node["divergence"] == [

@@ -135,7 +135,7 @@ def test_robot_moving_first_can_make_the_belief_true() -> None:
                 beliefs=[(["secret(a)"], [])], starts="robot")
     r = ehatp.solve(p)
     assert r.policy is not None
-    assert r.policy.children(r.policy.root)[0].action == "set_secret(a)"
+    assert r.policy.root.moves[0].action == "set_secret(a)"
 
 
 def test_pass_after_a_forced_robot_wait_is_not_covered_when_the_human_can_act() -> None:
@@ -261,7 +261,7 @@ def test_costs_change_the_robots_choice() -> None:
                 costs=Costs(actions={"set_lamp": Fraction(5, 2)}))
     r = ehatp.solve(p)
     assert r.policy is not None
-    assert r.policy.children(r.policy.root)[0].action == "set_lamp(a)"  # canonical tie-break
+    assert r.policy.root.moves[0].action == "set_lamp(a)"  # canonical tie-break
     assert r.policy.cost == Fraction(5, 2)
 
 

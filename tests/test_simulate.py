@@ -11,7 +11,7 @@ import typer
 from typer.testing import CliRunner
 
 import ehatp
-from ehatp.policy_format import Policy, PolicyNode
+from ehatp.policy_format import PathStep, Policy
 from ehatp.tools.executor import (
     ExecutionError,
     Executor,
@@ -70,7 +70,7 @@ def write_policy(tmp_path: Path, problem: Path) -> Path:
     return path
 
 
-def script_for(branch: list[PolicyNode], robot: str) -> str:
+def script_for(branch: list[PathStep], robot: str) -> str:
     """The human's moves of a branch, with the robot's as checked expectations."""
     lines = ["# derived from the policy"]
     for n in branch[1:]:
@@ -207,8 +207,8 @@ def test_human_leaving_the_opening_or_the_model() -> None:
 def test_policy_with_a_missing_branch(tmp_path: Path) -> None:
     d = policy_of(P2).to_dict()
     root = d["nodes"][0]
-    dropped = d["nodes"][root["children"][0]]["action"]
-    root["children"] = root["children"][1:]
+    dropped = root["moves"][0]["action"]
+    root["moves"] = root["moves"][1:]
     ex = Executor(ehatp.load(P2), Policy.from_dict(d))
     with pytest.raises(UncoveredHumanAction, match="policy node 0 does not cover"):
         ex.observe_human_action(dropped)
@@ -238,10 +238,11 @@ def test_policy_that_does_not_fit_the_problem(tmp_path: Path) -> None:
     with pytest.raises(PolicyMismatch, match="opening"):
         Executor(ehatp.load(QUAL), policy_of(P2))
     d = policy_of(P2).to_dict()
-    d["nodes"][1]["worlds"] = 7
+    first = d["nodes"][0]["moves"][0]
+    d["nodes"][first["to"]]["worlds"] = 7
     ex = Executor(ehatp.load(P2), Policy.from_dict(d))
-    with pytest.raises(PolicyMismatch, match="policy node 1 disagrees .* on worlds"):
-        ex.observe_human_action(d["nodes"][1]["action"])
+    with pytest.raises(PolicyMismatch, match=f"policy node {first['to']} disagrees .* on worlds"):
+        ex.observe_human_action(first["action"])
 
 
 # -- human modes -------------------------------------------------------------------------------
@@ -344,6 +345,6 @@ def test_executor_follows_every_branch_of_every_example(path: Path) -> None:
             else:
                 assert n.action in {a.label for a in ex.expected_human_actions()}
                 step = ex.observe_human_action(n.action)
-            assert step.node is n and len(ex.human_worlds()) == n.worlds
+            assert step.node is n.node and len(ex.human_worlds()) == n.worlds
             assert ex.explain(step)
         assert ex.done and ex.goal_reached and ex.next_robot_action() is None

@@ -25,8 +25,9 @@ from ehatp import (
     Speech,
 )
 from ehatp.check.validator import Report, _Semantics, validate
-from ehatp.policy_format import PolicyNode
+from ehatp.policy_format import FORMAT
 
+from .policy_v1 import tree_dict
 from .scenarios import lab_domain, problem
 
 HOME = ["human_at(lab)"]
@@ -90,37 +91,41 @@ def loose(x: Cost | None) -> Any:
 
 def build(p: Problem, root: N, *, objective: dict[str, Any] | None = None,
           worst_case: Cost | None = None, expected: Cost | None = None) -> Policy:
-    nodes: list[PolicyNode] = []
+    """The hand-written tree as a policy file of format version 1 (each node holds the move
+    into it), read back as a policy."""
+    nodes: list[dict[str, Any]] = []
 
     def add(n: N) -> int:
         kind, name, args, told = call(n.action)
         div = sorted({f"not {a}" for t, _ in n.diffs for a in t}
                      | {a for _, f in n.diffs for a in f})
-        node = PolicyNode(
+        node: dict[str, Any] = dict(
             id=len(nodes), agent=n.agent, kind=kind, action=n.action, name=name, args=args,
             cost=loose(n.cost), copresent=n.cop, k=n.k, worlds=len(n.diffs), divergence=div,
             world_diffs=[{"true": t, "false": f} for t, f in n.diffs], state=n.state,
             robot_agenda=n.robot, human_agenda=n.human, to_move=n.to_move, value=loose(n.value),
             goal=n.to_move is None, told=told)
         nodes.append(node)
-        node.children = [add(c) for c in n.kids]
-        return node.id
+        node["children"] = [add(c) for c in n.kids]
+        return int(node["id"])
 
     add(root)
     c = p.costs
-    return Policy(
-        problem=p.name, domain=p.domain.name, agents={"robot": "R", "human": "H"}, K=p.K,
+    return Policy.from_dict(dict(
+        format=FORMAT, version=1, problem=p.name, domain=p.domain.name,
+        agents={"robot": "R", "human": "H"}, K=p.K,
         costs={"inform": c.inform, "ask": c.ask, "wait": c.wait, "pass": c.pass_,
                "actions": dict(c.actions)},
-        nodes=nodes, cost=nodes[0].value,
-        communications=sum(1 for n in nodes if n.kind in ("inform", "ask") or n.told),
-        leaves=sum(1 for n in nodes if not n.children),
+        nodes=nodes, cost=nodes[0]["value"],
+        communications=sum(1 for n in nodes if n["kind"] in ("inform", "ask") or n["told"]),
+        leaves=sum(1 for n in nodes if not n["children"]),
         objective=objective or {"kind": p.objective.kind.value},
-        worst_case=loose(worst_case), expected=loose(expected))
+        worst_case=loose(worst_case), expected=loose(expected)))
 
 
 def mutated(policy: Policy, edit: Callable[[dict[str, Any]], None]) -> Policy:
-    d = copy.deepcopy(policy.to_dict())
+    """``policy`` unfolded into a version 1 tree, edited node by node, and read back."""
+    d = copy.deepcopy(tree_dict(policy))
     edit(d)
     return Policy.from_dict(d)
 
@@ -156,11 +161,7 @@ def solved(p: Problem) -> Policy:
 
 def moves(policy: Policy) -> list[str]:
     """The first branch, as agent-labelled moves."""
-    out, n = [], policy.root
-    while n.children:
-        n = policy.nodes[n.children[0]]
-        out.append(f"{n.agent} {n.action}")
-    return out
+    return [f"{n.agent} {n.action}" for n in next(policy.iter_branches())[1:]]
 
 
 # -- §4: the pass rule --------------------------------------------------------------------------
@@ -273,7 +274,7 @@ def test_a_non_anticipating_human_imagines_nothing_unseen_but_k_counts() -> None
     p = secret_problem(anticipates=False)
     policy = solved(p)
     assert moves(policy)[:2] == ["H go(lab, hall)", "R set_secret(a)"]
-    unseen = policy.nodes[policy.root.children[0] + 1]
+    unseen = policy.nodes[policy.nodes[policy.root.children[0]].children[0]]
     assert (unseen.worlds, unseen.k) == (1, 1)  # one world, yet a robot turn apart
     # back in the lab with the robot done, the human knows it is done: a goal, although its
     # world still lacks the hidden secret(a) the robot set
@@ -324,7 +325,7 @@ def call_problem(where: InformWhere, **kw: Any) -> Problem:
 def test_inform_anywhere_is_heard_apart_without_product_or_k() -> None:
     p = call_problem(InformWhere.ANYWHERE)
     policy = solved(p)
-    inform = next(n for n in policy.nodes if n.kind == "inform")
+    inform = next(policy.nodes[m.to] for _, m in policy.edges() if m.kind == "inform")
     assert not inform.copresent and inform.k == 1 and inform.worlds == 1
     ok(p, policy)
     caught(call_problem(InformWhere.COPRESENT), policy, "R inform(secret(a))]",
@@ -423,7 +424,7 @@ def speaking_robot(values: Sequence[Cost] = (5, 3, 0, 2, 1, 0)) -> N:
 def test_speaking_while_acting_is_one_move() -> None:
     p = speech_problem()
     policy = build(p, speaking_robot(), worst_case=5, expected=4)
-    assert policy.communications == 1 and policy.nodes[1].told == ["secret(a)"]
+    assert policy.communications == 1 and policy.root.moves[0].told == ["secret(a)"]
     ok(p, policy)
     ok(p, Policy.from_dict(policy.to_dict()))
     # the planner finds the same policy

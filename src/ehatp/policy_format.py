@@ -1,9 +1,13 @@
 """The policy file format: the robot policy as data, its JSON form, and nothing else.
 
-A policy is a tree that branches on every human choice. A node is one step: the agent that
-acted, the move (label, name and arguments in the domain's vocabulary), its cost, and what holds
-after it (co-presence, K-counter, the human's worlds and how they differ from the truth). The root
-is the initial state. See ``docs/policy-format.md``.
+A policy is an acyclic AND/OR graph that branches on every human choice (docs/semantics.md §3,
+§7). A :class:`PolicyNode` is a *state*: what holds there (co-presence, the K-counter, the
+human's worlds and how they differ from the truth, the agendas), who moves next and the cost to
+go. A :class:`PolicyMove` is an *edge*: who moved, the move in the domain's vocabulary and its
+cost, and the node it leads to. Each distinct state of the policy is stored once, and every
+path that reaches it shares it, so a file is proportional to the policy's distinct states, not
+to its branches. See ``docs/policy-format.md`` (version 2; version 1 files, which stored the
+tree unfolding, are still read and turned into this graph).
 
 This module imports neither the planner nor the validator: both use it, and so can any tool that
 only reads policy files.
@@ -12,6 +16,7 @@ only reads policy files.
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
@@ -23,20 +28,44 @@ Cost = int | Fraction
 
 POLICY_FIX = "give a policy JSON written by `ehatp solve --out FILE`"
 FORMAT = "ehatp-policy"
-VERSION = 1
+VERSION = 2  # the version written; READS lists every version read
+READS = (1, 2)
+COMM_KINDS = ("inform", "ask")
+
+
+@dataclass
+class PolicyMove:
+    """One move of the policy: an edge from the node where it is played to node ``to``."""
+
+    agent: str  # who moves (the domain's name for the robot or the human)
+    kind: str  # action | wait | pass | inform | ask | silence
+    action: str  # the move as printed: place(w, box2), inform(empty(box2)), wait
+    name: str  # the action's name (inform, ask, wait, pass, silence for the others)
+    args: list[str]  # its arguments (inform: the literals told; ask: the question)
+    cost: Cost
+    to: int  # the id of the node the move leads to
+    told: list[str] = field(default_factory=list)  # literals said with an action (speech)
+
+    @property
+    def communicates(self) -> bool:
+        """An ``inform`` or ``ask``, or an action said with an inform (docs/semantics.md §5)."""
+        return self.kind in COMM_KINDS or bool(self.told)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"agent": self.agent, "kind": self.kind, "action": self.action,
+                "name": self.name, "args": self.args, "cost": num(self.cost), "to": self.to,
+                "told": self.told}
 
 
 @dataclass
 class PolicyNode:
+    """One distinct state of the policy, and the moves the policy plays or covers there: one
+    (the robot's choice) where the robot moves, one per human option where the human moves,
+    none at a goal."""
+
     id: int
-    agent: str | None  # who acted to reach this node (None at the root)
-    kind: str  # start | action | wait | pass | inform | ask
-    action: str
-    name: str
-    args: list[str]
-    cost: Cost
     copresent: bool
-    k: int
+    k: int  # robot turns taken since the agents were last co-present
     worlds: int
     divergence: list[str]  # truth's literals on which some world disagrees
     world_diffs: list[dict[str, list[str]]]  # per world: atoms true / false unlike the truth
@@ -46,14 +75,92 @@ class PolicyNode:
     to_move: str | None  # who moves next (None at a goal leaf)
     value: Cost  # cost from here to the end, under the policy's objective
     goal: bool
-    children: list[int] = field(default_factory=list)
-    told: list[str] = field(default_factory=list)  # literals said with an action (speech)
+    moves: list[PolicyMove] = field(default_factory=list)
+
+    @property
+    def children(self) -> list[int]:
+        """The ids the moves lead to, in move order (an id may repeat: two moves, one state)."""
+        return [m.to for m in self.moves]
 
     def to_dict(self) -> dict[str, Any]:
-        d = {k: v for k, v in self.__dict__.items()}
-        d["cost"] = num(self.cost)
-        d["value"] = num(self.value)
-        return d
+        return {"id": self.id, "copresent": self.copresent, "k": self.k, "worlds": self.worlds,
+                "divergence": self.divergence, "world_diffs": self.world_diffs,
+                "state": self.state, "robot_agenda": self.robot_agenda,
+                "human_agenda": self.human_agenda, "to_move": self.to_move,
+                "value": num(self.value), "goal": self.goal,
+                "moves": [m.to_dict() for m in self.moves]}
+
+
+@dataclass(frozen=True)
+class PathStep:
+    """One step of a branch: the move played (None at the root) and the node it reaches. Reads
+    like a node of the version 1 tree: the move's fields and the node's."""
+
+    move: PolicyMove | None
+    node: PolicyNode
+
+    @property
+    def id(self) -> int:
+        return self.node.id
+
+    @property
+    def agent(self) -> str | None:
+        return None if self.move is None else self.move.agent
+
+    @property
+    def kind(self) -> str:
+        return "start" if self.move is None else self.move.kind
+
+    @property
+    def action(self) -> str:
+        return "start" if self.move is None else self.move.action
+
+    @property
+    def name(self) -> str:
+        return "start" if self.move is None else self.move.name
+
+    @property
+    def args(self) -> list[str]:
+        return [] if self.move is None else self.move.args
+
+    @property
+    def cost(self) -> Cost:
+        return 0 if self.move is None else self.move.cost
+
+    @property
+    def told(self) -> list[str]:
+        return [] if self.move is None else self.move.told
+
+    @property
+    def goal(self) -> bool:
+        return self.node.goal
+
+    @property
+    def copresent(self) -> bool:
+        return self.node.copresent
+
+    @property
+    def worlds(self) -> int:
+        return self.node.worlds
+
+    @property
+    def k(self) -> int:
+        return self.node.k
+
+    @property
+    def value(self) -> Cost:
+        return self.node.value
+
+    @property
+    def to_move(self) -> str | None:
+        return self.node.to_move
+
+    @property
+    def state(self) -> list[str]:
+        return self.node.state
+
+
+Branch = list[PathStep]
 
 
 @dataclass
@@ -65,8 +172,8 @@ class Policy:
     costs: dict[str, Any]
     nodes: list[PolicyNode]
     cost: Cost
-    communications: int
-    leaves: int
+    communications: int  # communication moves in the tree unfolding (count_communications)
+    leaves: int  # root-to-leaf branches (count_branches)
     optimal: bool = True
     stats: dict[str, Any] = field(default_factory=dict)
     after: list[str] = field(default_factory=list)  # the fixed opening the root follows
@@ -75,28 +182,79 @@ class Policy:
     worst_case: Cost | None = None  # the policy's worst-case cost (None: not recorded)
     expected: Cost | None = None  # its expected cost over human choices
 
+    # -- the graph ----------------------------------------------------------------------------
+
     @property
     def root(self) -> PolicyNode:
         return self.nodes[0]
 
     def children(self, n: PolicyNode) -> list[PolicyNode]:
-        return [self.nodes[i] for i in n.children]
+        return [self.nodes[m.to] for m in n.moves]
 
-    def branches(self) -> list[list[PolicyNode]]:
-        """Every root-to-leaf path."""
-        out: list[list[PolicyNode]] = []
-        stack: list[list[PolicyNode]] = [[self.root]]
+    def steps(self, n: PolicyNode) -> list[PathStep]:
+        """The moves out of ``n``, each with the node it reaches."""
+        return [PathStep(m, self.nodes[m.to]) for m in n.moves]
+
+    def edges(self) -> Iterator[tuple[PolicyNode, PolicyMove]]:
+        """Every move once, as (node it is played at, move), in node then move order."""
+        for n in self.nodes:
+            for m in n.moves:
+                yield n, m
+
+    def topological_order(self) -> list[int]:
+        """The node ids reachable from the root, parents before children. Raises
+        ValueError on a cycle (:meth:`load` refuses such files)."""
+        return topological_order(self.nodes)
+
+    def path_counts(self) -> list[int]:
+        """Per node, the number of root-to-node paths: its copies in the tree unfolding."""
+        paths = [0] * len(self.nodes)
+        paths[0] = 1
+        for i in self.topological_order():
+            for m in self.nodes[i].moves:
+                paths[m.to] += paths[i]
+        return paths
+
+    def count_branches(self) -> int:
+        """Root-to-leaf branches (one per combination of human choices), by counting paths
+        over the graph: linear in its size, however many branches there are."""
+        paths = self.path_counts()
+        return sum(paths[n.id] for n in self.nodes if not n.moves)
+
+    def count_communications(self) -> int:
+        """Communication moves in the tree unfolding: each ``inform``/``ask`` move, or move
+        said with an inform, once per root path that reaches it (version 1 counted the tree's
+        nodes; the number is the same)."""
+        paths = self.path_counts()
+        return sum(paths[n.id] for n, m in self.edges() if m.communicates)
+
+    def tree_size(self) -> int:
+        """Nodes in the tree unfolding (what version 1 files stored)."""
+        return sum(self.path_counts())
+
+    # -- branches, for small policies ---------------------------------------------------------
+
+    def iter_branches(self) -> Iterator[Branch]:
+        """Every root-to-leaf path, lazily, in move order. There are :attr:`leaves` of them,
+        which can be exponentially many more than nodes: stop early on a large policy."""
+        stack: list[Branch] = [[PathStep(None, self.root)]]
         while stack:
             path = stack.pop()
-            kids = self.children(path[-1])
-            if not kids:
-                out.append(path)
-            for c in reversed(kids):
-                stack.append([*path, c])
-        return out
+            moves = path[-1].node.moves
+            if not moves:
+                yield path
+            for m in reversed(moves):
+                stack.append([*path, PathStep(m, self.nodes[m.to])])
+
+    def branches(self) -> list[Branch]:
+        """Every root-to-leaf path (a list: for small policies, see :meth:`iter_branches`)."""
+        return list(self.iter_branches())
 
     def timelines(self) -> list[dict[str, Any]]:
-        return [timeline(self, b) for b in self.branches()]
+        """One timeline per branch (:func:`timeline`), for small policies."""
+        return [timeline(self, b) for b in self.iter_branches()]
+
+    # -- JSON ---------------------------------------------------------------------------------
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -107,22 +265,39 @@ class Policy:
             "objective": self.objective,
             "worst_case": None if self.worst_case is None else num(self.worst_case),
             "expected": None if self.expected is None else num(self.expected),
-            "nodes": [n.to_dict() for n in self.nodes], "timelines": self.timelines(),
+            "nodes": [n.to_dict() for n in self.nodes],
         }
 
     def to_json(self) -> str:
-        return json.dumps(self.to_dict(), indent=1, sort_keys=True) + "\n"
+        """The file's text: keys sorted, one node per line, so the same policy always gives
+        the same bytes."""
+        d = self.to_dict()
+        parts = []
+        for key in sorted(d):
+            if key == "nodes":
+                body = ",\n".join(f"  {_dumps(n)}" for n in d["nodes"])
+                parts.append(f' "nodes": [\n{body}\n ]')
+            else:
+                parts.append(f" {json.dumps(key)}: {_dumps(d[key])}")
+        return "{\n" + ",\n".join(parts) + "\n}\n"
 
     def write(self, path: str | Path) -> None:
         Path(path).write_text(self.to_json(), encoding="utf-8")
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> Policy:
+        """A policy from its JSON object, version 2 or 1 (a version 1 tree becomes a graph
+        with one node per tree node). Trusts the shapes: :meth:`load` checks them."""
         if d.get("format") != FORMAT:
             raise ValueError(f"not an ehatp policy (format is {d.get('format')!r})")
-        if d.get("version") != VERSION:
-            raise ValueError(f"policy format version {d.get('version')} is not {VERSION}")
-        nodes = [PolicyNode(**{k: v for k, v in n.items()}) for n in d["nodes"]]
+        version = d.get("version")
+        if version not in READS or isinstance(version, bool):
+            raise ValueError(f"policy format version {version} is not one this ehatp reads "
+                             f"({', '.join(map(str, READS))})")
+        raw = d["nodes"]
+        if not isinstance(raw, list):
+            raise TypeError("nodes must be a list")
+        nodes = _nodes_v1(raw) if version == 1 else [_node(n) for n in raw]
         return cls(d["problem"], d["domain"], d["agents"], d["K"], d["costs"], nodes, d["cost"],
                    d["communications"], d["leaves"], d.get("optimal", True), d.get("stats", {}),
                    d.get("after", []), d.get("objective", {"kind": "worst-case"}),
@@ -134,7 +309,7 @@ class Policy:
 
     @classmethod
     def load(cls, path: str | Path) -> Policy:
-        """Read a policy file written by ``ehatp solve``, checking its tree; anything else is
+        """Read a policy file written by ``ehatp solve``, checking its graph; anything else is
         one :class:`~ehatp.errors.InputError` line naming the file."""
         name = str(path)
         try:
@@ -161,37 +336,127 @@ class Policy:
         except KeyError as e:
             raise InputError(name, "", f"not an ehatp policy (missing field {e})",
                              POLICY_FIX) from None
-        except TypeError as e:
-            raise InputError(name, "", f"malformed policy node ({e})", POLICY_FIX) from None
-        policy._check_tree(name)
+        except (TypeError, AttributeError) as e:
+            place, what = _malformed(raw) or ("", f"malformed policy node ({e})")
+            raise InputError(name, place, what, POLICY_FIX) from None
+        policy._check_graph(name)
         return policy
 
-    def _check_tree(self, name: str) -> None:
-        # readers walk children blindly; a hand-edited file must not send them into a loop
+    def _check_graph(self, name: str) -> None:
+        # readers follow moves blindly; a hand-edited file must not send them into a loop
         n = len(self.nodes)
         if n == 0:
             raise InputError(name, "nodes", "the policy has no nodes", POLICY_FIX)
         if not isinstance(self.agents, dict) or not {"robot", "human"} <= self.agents.keys():
             raise InputError(name, "agents", "agents must name the robot and the human",
                              POLICY_FIX)
-        has_parent = [False] * n
         for i, node in enumerate(self.nodes):
             if node.id != i:
                 raise InputError(name, f"nodes[{i}]", f"node id {node.id} is not its position",
                                  POLICY_FIX)
-            for c in node.children:
-                if not isinstance(c, int) or not 0 < c < n or has_parent[c]:
-                    raise InputError(name, f"nodes[{i}].children",
-                                     f"child {c!r} is out of range or has two parents",
+            if not isinstance(node.moves, list):
+                raise InputError(name, f"nodes[{i}].moves", "moves must be a list",
+                                 POLICY_FIX)
+            for j, m in enumerate(node.moves):
+                if not isinstance(m.to, int) or isinstance(m.to, bool) or not 0 < m.to < n:
+                    raise InputError(name, f"nodes[{i}].moves[{j}].to",
+                                     f"{m.to!r} is not the id of a node other than the root",
                                      POLICY_FIX)
-                has_parent[c] = True
             if not isinstance(node.world_diffs, list) or not isinstance(node.state, list):
                 raise InputError(name, f"nodes[{i}]", "world_diffs and state must be lists",
                                  POLICY_FIX)
-        orphans = n - sum(has_parent) - 1
-        if orphans:
-            raise InputError(name, "nodes", f"{orphans} node(s) are not below the root",
+        try:
+            reached = len(self.topological_order())
+        except ValueError as e:
+            raise InputError(name, "nodes", str(e), POLICY_FIX) from None
+        if reached != n:
+            raise InputError(name, "nodes", f"{n - reached} node(s) are not below the root",
                              POLICY_FIX)
+
+
+def topological_order(nodes: list[PolicyNode]) -> list[int]:
+    """The ids reachable from node 0, parents before children (reverse DFS postorder, moves in
+    order); ValueError naming a node on a cycle."""
+    state = [0] * len(nodes)  # 0 new, 1 on the DFS stack, 2 done
+    post: list[int] = []
+    stack: list[tuple[int, int]] = [(0, 0)]
+    state[0] = 1
+    while stack:
+        i, j = stack[-1]
+        moves = nodes[i].moves
+        if j == len(moves):
+            stack.pop()
+            state[i] = 2
+            post.append(i)
+            continue
+        stack[-1] = (i, j + 1)
+        c = moves[j].to
+        if state[c] == 1:
+            raise ValueError(f"the moves form a cycle through node {c}: a policy is acyclic")
+        if state[c] == 0:
+            state[c] = 1
+            stack.append((c, 0))
+    post.reverse()
+    return post
+
+
+def _malformed(raw: dict[str, Any]) -> tuple[str, str] | None:
+    """Where a policy's JSON has the wrong shape for the reader, in the file's own terms."""
+    nodes = raw.get("nodes")
+    if not isinstance(nodes, list):
+        return "nodes", "nodes must be a list of node objects"
+    for i, n in enumerate(nodes):
+        if not isinstance(n, dict):
+            return f"nodes[{i}]", f"a node must be an object, got {n!r:.40}"
+        moves = n.get("moves", [])
+        if not isinstance(moves, list):
+            return f"nodes[{i}].moves", "moves must be a list of move objects"
+        for j, m in enumerate(moves):
+            if not isinstance(m, dict):
+                return f"nodes[{i}].moves[{j}]", f"a move must be an object, got {m!r:.40}"
+    return None
+
+
+def _dumps(x: Any) -> str:
+    return json.dumps(x, sort_keys=True)
+
+
+_NODE_KEYS = ("id", "copresent", "k", "worlds", "divergence", "world_diffs", "state",
+              "robot_agenda", "human_agenda", "to_move", "value", "goal")
+
+
+def _node(n: dict[str, Any]) -> PolicyNode:
+    extra = set(n) - {*_NODE_KEYS, "moves"}
+    if extra:
+        raise TypeError(f"unexpected field(s) {', '.join(sorted(extra))} in a node")
+    moves = n["moves"]
+    if not isinstance(moves, list):
+        raise TypeError("moves must be a list")
+    return PolicyNode(**{k: n[k] for k in _NODE_KEYS},
+                      moves=[PolicyMove(**m) for m in moves])
+
+
+def _nodes_v1(raw: list[Any]) -> list[PolicyNode]:
+    """Version 1: the tree in preorder, each node holding the move into it. The moves go onto
+    the edges; every tree node stays a node of its own."""
+    move_keys = ("agent", "kind", "action", "name", "args", "cost")
+    nodes = []
+    for n in raw:
+        extra = set(n) - {*_NODE_KEYS, *move_keys, "children", "told"}
+        if extra:
+            raise TypeError(f"unexpected field(s) {', '.join(sorted(extra))} in a node")
+        nodes.append(PolicyNode(**{k: n[k] for k in _NODE_KEYS}))
+    for i, n in enumerate(raw):
+        children = n["children"]
+        if not isinstance(children, list):
+            raise TypeError(f"nodes[{i}].children must be a list")
+        for c in children:
+            if not isinstance(c, int) or isinstance(c, bool) or not 0 <= c < len(raw):
+                raise ValueError(f"nodes[{i}].children: child {c!r} is out of range")
+            kid = raw[c]
+            nodes[i].moves.append(PolicyMove(**{k: kid[k] for k in move_keys}, to=c,
+                                             told=kid.get("told", [])))
+    return nodes
 
 
 def num(c: Cost | float) -> int | float:
@@ -200,25 +465,28 @@ def num(c: Cost | float) -> int | float:
     return c
 
 
-def timeline(policy: Policy, branch: list[PolicyNode]) -> dict[str, Any]:
+def timeline(policy: Policy, branch: Branch) -> dict[str, Any]:
     """Turn-taking steps while together; parallel lanes between separation and reunion."""
     r_name, h_name = policy.agents["robot"], policy.agents["human"]
     steps: list[dict[str, Any]] = []
     lanes: dict[str, list[str]] | None = None
     prev = branch[0]
     for n in branch[1:]:
-        assert n.agent is not None
+        assert n.move is not None
+        agent, action = n.move.agent, n.move.action
         if prev.copresent:
-            steps.append({"agent": n.agent, "action": n.action})
+            steps.append({"agent": agent, "action": action})
         else:
             if lanes is None:
                 lanes = {r_name: [], h_name: []}
                 steps.append({"parallel": lanes})
-            lanes[n.agent].append(n.action)
+            lanes[agent].append(action)
         if n.copresent:
             lanes = None
         prev = n
     return {"leaf": branch[-1].id, "steps": steps}
 
 
-__all__ = ["FORMAT", "POLICY_FIX", "VERSION", "Cost", "Policy", "PolicyNode", "num", "timeline"]
+__all__ = ["COMM_KINDS", "FORMAT", "POLICY_FIX", "READS", "VERSION", "Branch", "Cost",
+           "PathStep", "Policy", "PolicyMove", "PolicyNode", "num", "timeline",
+           "topological_order"]

@@ -6,8 +6,12 @@ operators, methods, formulas) and re-implements refinement, situation assessment
 updates, the product of unseen robot turns and both agents' options with plain sets and loops.
 
 Every node of the policy is recomputed from the initial state (after the fixed opening
-``policy.after``) and its recorded facts, move, cost and value are compared with the
-recomputation. Checking stops at the first violation of a branch; other branches go on.
+``policy.after``) and its recorded facts, the moves out of it, their costs and its value are
+compared with the recomputation. Checking stops at the first violation of a branch; other
+branches go on. The policy is a graph (docs/policy-format.md): a node reached again by another
+path is not checked again, but the state recomputed along that path must equal the one of its
+first visit, so the replay is linear in the policy's nodes and moves, and so are the values and
+the branch counts, computed over the graph children first.
 
 The problem's options are read as the document states them: the human's pass rule and whether
 it anticipates unseen robot turns (``[human]``, §4), where and how the robot may inform and
@@ -28,10 +32,10 @@ from ..model.formula import And, Formula, StateFn, negate
 from ..model.grounding import FINISH, GModel, GOp, Grounded, ground_problem
 from ..model.options import InformWhere, ObjectiveKind, Passes, Relevance, Speech
 from ..model.problem import Problem
-from ..policy_format import Policy, PolicyNode
+from ..policy_format import Policy, PolicyMove, PolicyNode
 
 ROBOT, HUMAN = 0, 1
-ACTION, WAIT, PASS, INFORM, ASK, START = "action", "wait", "pass", "inform", "ask", "start"
+ACTION, WAIT, PASS, INFORM, ASK = "action", "wait", "pass", "inform", "ask"
 SILENCE = "silence"  # the robot's silent move at a speech opening (section 5)
 BLOCKED = -2  # the end of a human plan where no action applies (relevance "plan", section 5)
 
@@ -644,6 +648,30 @@ class _Semantics:
         return out
 
 
+def _differences(a: EState, b: EState, sem: _Semantics) -> str:
+    """What tells two states of section 3 apart, in the domain's words."""
+    g = sem.g
+    out = []
+    if a.turn != b.turn:
+        out.append(f"{sem.names[a.turn]} moved next then, {sem.names[b.turn]} now")
+    if a.true != b.true:
+        out.append("the true state T differs on " + ", ".join(g.mask_atoms(a.true ^ b.true)))
+    for what, x, y in (("robot agenda", a.robot, b.robot), ("human agenda", a.human, b.human)):
+        if x != y:
+            out.append(f"the {what} is {[g.task_names[t] for t in x]} then, "
+                       f"{[g.task_names[t] for t in y]} now")
+    if a.worlds != b.worlds:
+        out.append(f"the human's worlds differ ({len(a.worlds)} then, {len(b.worlds)} now)")
+    for what, i, j in (("k", a.k, b.k), ("the passive count", a.passive, b.passive)):
+        if i != j:
+            out.append(f"{what} is {i} then, {j} now")
+    if a.forced != b.forced:
+        out.append("the robot's last wait was forced on one path only (section 4)")
+    if a.opening != b.opening:
+        out.append("it is the speech opening on one path only (section 5)")
+    return "; ".join(out)
+
+
 def _ask_matches(step: Step, label: str) -> bool:
     if step.label == label:
         return True
@@ -654,9 +682,12 @@ def _ask_matches(step: Step, label: str) -> bool:
 
 @dataclass
 class _Item:
+    """A node to check: the state the replay reached it in, the path there, the move into it."""
+
     node: PolicyNode
     es: EState
     path: list[str]
+    move: PolicyMove | None
 
 
 class _Validator:
@@ -666,11 +697,18 @@ class _Validator:
         self.sem = _Semantics(problem)
         self.violations: list[str] = []
         self.nodes_checked = 0
-        self.branches_checked = 0
         self.goals_reached: set[int] = set()  # goal leaves whose branch checked out
-        self.step_cost: dict[int, Fraction] = {}  # node id -> the cost of the move into it
-        self.weight: dict[int, Fraction] = {}  # node id -> the move's weight (section 7)
+        # (node id, move index) -> the move's cost and weight (section 7), for checked moves
+        self.step_cost: dict[tuple[int, int], Fraction] = {}
+        self.weight: dict[tuple[int, int], Fraction] = {}
         self.turn: dict[int, int] = {}  # node id -> who moves next there (checked nodes)
+        # the DAG walk: the state each node was first reached in, and by which path
+        self.first: dict[int, EState] = {}
+        self.path_of: dict[int, list[str]] = {}
+        # branches checked, counted over the graph: where a branch's check ends at a node,
+        # and the children a node's branches go on into
+        self.ends: dict[int, int] = {}
+        self.goes_on: dict[int, list[int]] = {}
 
     def fail(self, path: Sequence[str], rule: str) -> None:
         self.violations.append(f"branch [{', '.join(path)}]: {rule}")
@@ -781,7 +819,7 @@ class _Validator:
         cmp("k", node.k, es.k)
         cmp("worlds", node.worlds, len(es.worlds))
         cmp("to_move", node.to_move, None if goal else self.name(es.turn))
-        if (node.kind == START and not self.policy.after and es.turn == HUMAN and not goal
+        if (node.id == 0 and not self.policy.after and es.turn == HUMAN and not goal
                 and node.to_move == self.name(ROBOT)
                 and self.problem.communication.speech == Speech.WITH_ACTION):
             why = sem.inform_search(replace(es, turn=ROBOT, opening=True))
@@ -876,14 +914,17 @@ class _Validator:
         self.check_costs()
         self.check_objective()
         root_es = self.replay_after()
+        found = self.order()
+        order = found if isinstance(found, list) else None
         if root_es is not None:
-            root = nodes[0]
-            if root.kind != START or root.agent is not None or not _same(root.cost, 0):
-                self.fail([], "the root must be a start node with no agent and cost 0")
-            else:
-                self.walk(root_es)
-        self.check_summary()
-        return self.report()
+            self.walk(root_es)
+        if order is None:
+            self.fail([], f"node {found} is its own descendant: the policy has a cycle "
+                      "(section 7: policies are acyclic)")
+        elif len(order) != len(nodes):
+            self.fail([], f"{len(nodes) - len(order)} node(s) are not reachable from the root")
+        self.check_summary(order)
+        return self.report(order)
 
     def check_costs(self) -> None:
         c = self.problem.costs
@@ -898,68 +939,118 @@ class _Validator:
             self.fail([], f"policy costs['actions'] is {acts}, the problem's is "
                       f"{dict(c.actions)}")
 
-    def walk(self, root_es: EState) -> None:
+    def order(self) -> list[int] | int:
+        """The nodes reachable from the root, children before parents, or a node on a cycle
+        of moves (a policy is acyclic, section 7)."""
         nodes = self.policy.nodes
-        seen: set[int] = set()
-        stack = [_Item(nodes[0], root_es, [])]
-        self.step_cost[0] = Fraction(0)
+        state: dict[int, int] = {0: 1}  # 1: on the stack, 2: done
+        post: list[int] = []
+        stack = [(0, 0)]
+        while stack:
+            i, j = stack[-1]
+            kids = [c for c in nodes[i].children if 0 <= c < len(nodes)]
+            if j == len(kids):
+                stack.pop()
+                state[i] = 2
+                post.append(i)
+                continue
+            stack[-1] = (i, j + 1)
+            c = kids[j]
+            if state.get(c) == 1:
+                return c
+            if c not in state:
+                state[c] = 1
+                stack.append((c, 0))
+        return post
+
+    def walk(self, root_es: EState) -> None:
+        """Replay the policy depth-first from the root. A node reached again by another path
+        is not checked again: the state recomputed along the new path must equal the one of
+        its first visit (then everything below follows as before), so the walk is linear in
+        the policy's nodes and moves however many branches share them."""
+        nodes = self.policy.nodes
+        self.first[0], self.path_of[0] = root_es, []
+        stack = [_Item(nodes[0], root_es, [], None)]
         while stack:
             it = stack.pop()
-            node, es, path = it.node, it.es, it.path
-            if node.id in seen:
-                self.fail(path, f"node {node.id} is reached twice: the policy is not a tree")
-                continue
-            seen.add(node.id)
+            node = it.node
             self.nodes_checked += 1
-            kids_ok = self.visit(node, es, path)
-            for child, st in reversed(kids_ok):
+            kids_ok = self.visit(node, it.es, it.path, it.move)
+            goes_on = self.goes_on.setdefault(node.id, [])
+            for j, st in reversed(kids_ok):
                 assert st.after is not None
-                stack.append(_Item(child, st.after, [*path, self.move_label(st.agent,
-                                                                           child.action)]))
-        if not self.violations and len(seen) != len(nodes):
-            self.fail([], f"{len(nodes) - len(seen)} node(s) are not reachable from the root")
+                move = node.moves[j]
+                child = nodes[move.to]
+                path = [*it.path, self.move_label(st.agent, move.action)]
+                seen = self.first.get(child.id)
+                if seen is None:
+                    self.first[child.id], self.path_of[child.id] = st.after, path
+                    stack.append(_Item(child, st.after, path, move))
+                elif seen != st.after:
+                    self.fail(path, f"node {child.id} is shared, but this path reaches it in "
+                              "another state than its first one (by "
+                              f"[{', '.join(self.path_of[child.id])}]): "
+                              + _differences(seen, st.after, self.sem))
+                    self.end(node.id)
+                    continue
+                goes_on.append(child.id)
 
-    def visit(self, node: PolicyNode, es: EState, path: list[str]) -> list[tuple[PolicyNode,
-                                                                                 Step]]:
-        """Check one node; return the children to descend into with their moves."""
+    def end(self, node: int) -> None:
+        """One branch's check ends at ``node`` (a leaf, or at a violation)."""
+        self.ends[node] = self.ends.get(node, 0) + 1
+
+    def branches_checked(self, order: list[int] | None) -> int:
+        """Branches checked, each to its end or its first violation, counted over the graph
+        (a node's count is the sum of its children's, plus the branches ending there)."""
+        if order is None:
+            return sum(self.ends.values())
+        count: dict[int, int] = {}
+        for n in order:  # children first
+            count[n] = self.ends.get(n, 0) + sum(count.get(c, 0)
+                                                 for c in self.goes_on.get(n, []))
+        return count.get(0, 0)
+
+    def visit(self, node: PolicyNode, es: EState, path: list[str],
+              move: PolicyMove | None) -> list[tuple[int, Step]]:
+        """Check one node reached by ``move``; return the moves to follow (by index) with the
+        steps the semantics gives for them."""
         sem = self.sem
         nodes = self.policy.nodes
-        where = f"node {node.id} ({node.agent or ''} {node.action})".replace("( ", "(")
+        where = (f"node {node.id} (start)" if move is None
+                 else f"node {node.id} ({move.agent} {move.action})")
         goal = sem.is_goal(es)
         self.turn[node.id] = es.turn
         bad = self.facts(node, es, goal)
         if bad:
             self.fail(path, f"{where}: recorded facts differ from the semantics: "
                       + "; ".join(bad))
-            self.branches_checked += 1
+            self.end(node.id)
             return []
         if any(c < 0 or c >= len(nodes) for c in node.children):
-            self.fail(path, f"{where}: a child id is out of range")
-            self.branches_checked += 1
+            self.fail(path, f"{where}: a move leads to a node id out of range")
+            self.end(node.id)
             return []
-        kids = [nodes[c] for c in node.children]
         if goal:
-            if kids:
+            if node.moves:
                 self.fail(path, f"{where}: a goal (section 6) must be a leaf, but it has "
-                          f"{len(kids)} child(ren)")
-                self.branches_checked += 1
+                          f"{len(node.moves)} move(s)")
             else:
                 self.goals_reached.add(node.id)
-                self.branches_checked += 1
+            self.end(node.id)
             return []
-        if not kids:
+        if not node.moves:
             self.fail(path, f"{where}: leaf that is not a goal (section 6): "
                       + self.why_not_goal(es))
-            self.branches_checked += 1
+            self.end(node.id)
             return []
         if es.passive >= 3:
             self.fail(path, f"{where}: dead end: third passive move (wait/pass) in a row and "
                       "not a goal (section 6)")
-            self.branches_checked += 1
+            self.end(node.id)
             return []
         if es.turn == ROBOT:
-            return self.robot_node(node, es, path, kids, where)
-        return self.human_node(node, es, path, kids, where)
+            return self.robot_node(node, es, path, where)
+        return self.human_node(node, es, path, where)
 
     def why_not_goal(self, es: EState) -> str:
         sem, g = self.sem, self.sem.g
@@ -973,33 +1064,37 @@ class _Validator:
             return "the human's agenda does not certainly finish over W"
         return "in some world the robot agenda the human attributes to the robot cannot finish"
 
-    def check_move(self, child: PolicyNode, st: Step, path: list[str]) -> bool:
+    def check_move(self, node: PolicyNode, j: int, st: Step, path: list[str]) -> bool:
+        """The recorded move ``node.moves[j]`` is the move ``st`` of the semantics: agent,
+        kind, name and arguments, what was said with it, and cost (sections 4, 5, 7)."""
+        move = node.moves[j]
+        child = self.policy.nodes[move.to]
         lbl = self.move_label(st.agent, st.label)
-        cpath = [*path, self.move_label(st.agent, child.action)]
+        cpath = [*path, self.move_label(st.agent, move.action)]
         where = f"node {child.id} ({lbl})"
-        if child.agent != self.name(st.agent):
-            self.fail(cpath, f"{where}: agent is {child.agent!r}, expected "
+        if move.agent != self.name(st.agent):
+            self.fail(cpath, f"{where}: agent is {move.agent!r}, expected "
                       f"{self.name(st.agent)!r}")
             return False
-        if child.kind != st.kind:
-            self.fail(cpath, f"{where}: kind is {child.kind!r}, expected {st.kind!r}")
+        if move.kind != st.kind:
+            self.fail(cpath, f"{where}: kind is {move.kind!r}, expected {st.kind!r}")
             return False
         want_call = self.call(st)
-        if (child.name, list(child.args)) != want_call:
-            self.fail(cpath, f"{where}: name and args are {child.name!r} {list(child.args)}, "
+        if (move.name, list(move.args)) != want_call:
+            self.fail(cpath, f"{where}: name and args are {move.name!r} {list(move.args)}, "
                       f"expected {want_call[0]!r} {want_call[1]}")
             return False
-        if list(child.told) != list(st.told):
-            self.fail(cpath, f"{where}: told is {list(child.told)}, but the move says "
+        if list(move.told) != list(st.told):
+            self.fail(cpath, f"{where}: told is {list(move.told)}, but the move says "
                       + (f"{list(st.told)}" if st.told else "nothing")
                       + " (speech, section 5)")
             return False
-        if not _same(child.cost, st.cost):
-            self.fail(cpath, f"{where}: cost is {child.cost}, but the move costs "
+        if not _same(move.cost, st.cost):
+            self.fail(cpath, f"{where}: cost is {move.cost}, but the move costs "
                       f"{_num(st.cost)} under the problem's costs (section 7)")
             return False
-        self.step_cost[child.id] = st.cost
-        self.weight[child.id] = self.problem.objective.weight(child.action, want_call[0])
+        self.step_cost[node.id, j] = st.cost
+        self.weight[node.id, j] = self.problem.objective.weight(move.action, want_call[0])
         return True
 
     def call(self, st: Step) -> tuple[str, list[str]]:
@@ -1017,44 +1112,47 @@ class _Validator:
         return st.kind, []  # wait, pass, silence (also a wait said with an inform)
 
     def robot_node(self, node: PolicyNode, es: EState, path: list[str],
-                   kids: list[PolicyNode], where: str) -> list[tuple[PolicyNode, Step]]:
+                   where: str) -> list[tuple[int, Step]]:
         g = self.sem.g
-        if len(kids) != 1:
-            self.fail(path, f"{where}: a robot node must have exactly one child (an OR "
-                      f"choice), it has {len(kids)}: {[k.action for k in kids]}")
-            self.branches_checked += 1
+        if len(node.moves) != 1:
+            self.fail(path, f"{where}: a robot node must have exactly one move (its child: "
+                      f"an OR choice), it has {len(node.moves)}: "
+                      f"{[m.action for m in node.moves]}")
+            self.end(node.id)
             return []
-        child = kids[0]
-        cpath = [*path, self.move_label(ROBOT, child.action)]
-        r = self.robot_steps(es, child.action)
+        move = node.moves[0]
+        child = self.policy.nodes[move.to]
+        cpath = [*path, self.move_label(ROBOT, move.action)]
+        r = self.robot_steps(es, move.action)
         if isinstance(r, str):
-            self.fail(cpath, f"node {child.id} (R {child.action}): not a legal robot option "
+            self.fail(cpath, f"node {child.id} (R {move.action}): not a legal robot option "
                       f"(section 4): {r}")
-            self.branches_checked += 1
+            self.end(node.id)
             return []
         # one action may arise from several refinements: the recorded agenda tells which
         st = next((s for s in r if s.after is not None and [g.task_names[t] for t in
                                                             s.after.robot] == child.robot_agenda),
                   r[0])
-        if not self.check_move(child, st, path):
-            self.branches_checked += 1
+        if not self.check_move(node, 0, st, path):
+            self.end(node.id)
             return []
-        return [(child, st)]
+        return [(0, st)]
 
     def human_node(self, node: PolicyNode, es: EState, path: list[str],
-                   kids: list[PolicyNode], where: str) -> list[tuple[PolicyNode, Step]]:
+                   where: str) -> list[tuple[int, Step]]:
         g = self.sem.g
         options = self.sem.human_options(es)
         used: list[Step] = []
-        out: list[tuple[PolicyNode, Step]] = []
-        for child in kids:
-            cpath = [*path, self.move_label(HUMAN, child.action)]
-            matches = self.human_steps(es, child.action, options)
+        out: list[tuple[int, Step]] = []
+        for j, move in enumerate(node.moves):
+            child = self.policy.nodes[move.to]
+            cpath = [*path, self.move_label(HUMAN, move.action)]
+            matches = self.human_steps(es, move.action, options)
             if not matches:
-                self.fail(cpath, f"node {child.id} (H {child.action}): extra human branch: "
+                self.fail(cpath, f"node {child.id} (H {move.action}): extra human branch: "
                           f"not one of the human's options (section 4) "
                           f"{[o.label for o in options]}")
-                self.branches_checked += 1
+                self.end(node.id)
                 continue
             st = next((m for m in matches if m.after is not None
                        and [g.task_names[t] for t in m.after.human] == child.human_agenda
@@ -1062,20 +1160,20 @@ class _Validator:
             if st is None:
                 st = next((m for m in matches if m not in used), matches[0])
             if st in used:
-                self.fail(cpath, f"node {child.id} (H {child.action}): duplicate human "
+                self.fail(cpath, f"node {child.id} (H {move.action}): duplicate human "
                           "branch: this option is already covered")
-                self.branches_checked += 1
+                self.end(node.id)
                 continue
             used.append(st)
             if st.after is None:
-                self.fail(cpath, f"node {child.id} (H {child.action}): the human's action is "
+                self.fail(cpath, f"node {child.id} (H {move.action}): the human's action is "
                           "not applicable in T: the branch fails (acting on a false belief)")
-                self.branches_checked += 1
+                self.end(node.id)
                 continue
-            if not self.check_move(child, st, path):
-                self.branches_checked += 1
+            if not self.check_move(node, j, st, path):
+                self.end(node.id)
                 continue
-            out.append((child, st))
+            out.append((j, st))
         for o in options:
             if o in used:
                 continue
@@ -1089,37 +1187,30 @@ class _Validator:
 
     # -- values and the summary ----------------------------------------------------------------
 
-    def values(self) -> tuple[dict[int, Fraction | None], dict[int, Fraction | None]]:
+    def values(self, order: list[int] | None
+               ) -> tuple[dict[int, Fraction | None], dict[int, Fraction | None]]:
         """§7: the worst-case and the expected cost-to-go of every node, from the validator's
-        own move costs and the problem's weights; None under a violation."""
+        own move costs and the problem's weights, children before parents; None under a
+        violation (or everywhere on a cyclic policy)."""
         nodes = self.policy.nodes
         worst: dict[int, Fraction | None] = {}
         mean: dict[int, Fraction | None] = {}
-        order: list[int] = []
-        stack, seen = [0], set()
-        while stack:
-            n = stack.pop()
-            if n in seen or n < 0 or n >= len(nodes):
-                continue
-            seen.add(n)
-            order.append(n)
-            stack.extend(nodes[n].children)
-        for n in reversed(order):
+        for n in order or []:
             node = nodes[n]
             worst[n] = mean[n] = None
-            if not node.children:
+            if not node.moves:
                 if n in self.goals_reached:
                     worst[n] = mean[n] = Fraction(0)
                 continue
             turn = self.turn.get(n)
-            if turn is None or (turn == ROBOT and len(node.children) != 1):
+            if turn is None or (turn == ROBOT and len(node.moves) != 1):
                 continue
             parts: list[tuple[Fraction, Fraction, Fraction]] = []
-            for c in node.children:
-                w, m, cost = worst.get(c), mean.get(c), self.step_cost.get(c)
-                if w is None or m is None or cost is None:
+            for j, m in enumerate(node.moves):
+                w, v, cost = worst.get(m.to), mean.get(m.to), self.step_cost.get((n, j))
+                if w is None or v is None or cost is None:
                     break
-                parts.append((cost + w, cost + m, self.weight.get(c, Fraction(1))))
+                parts.append((cost + w, cost + v, self.weight.get((n, j), Fraction(1))))
             else:
                 worst[n] = max(p[0] for p in parts)
                 total = sum((p[2] for p in parts), Fraction(0))
@@ -1147,20 +1238,19 @@ class _Validator:
             self.fail([], f"policy objective ties are {list(ties)}, but the problem's are "
                       f"{list(want.ties)} (section 7)")
 
-    def check_summary(self) -> None:
+    def check_summary(self, order: list[int] | None) -> None:
         pol = self.policy
         nodes = pol.nodes
-        worst, mean = self.values()
+        worst, mean = self.values(order)
         expected = self.problem.objective.kind == ObjectiveKind.EXPECTED
         val, what = (mean, "expected") if expected else (worst, "worst-case")
         paths = self.paths()
-        for n in sorted(val, key=lambda i: len(paths.get(i, []))):
+        for n in sorted(val, key=lambda i: (len(paths.get(i, [])), i)):
             v = val[n]
             if v is not None and not _same(nodes[n].value, v):
-                node = nodes[n]
-                who = f"{node.agent} {node.action}" if node.agent else node.action
-                self.fail(paths.get(n, []), f"node {n} ({who}): value is {node.value}, but "
-                          f"its {what} cost-to-go is {_num(v)} (section 7)")
+                self.fail(paths.get(n, []), f"node {n} ({self.reached_by(n)}): value is "
+                          f"{nodes[n].value}, but its {what} cost-to-go is {_num(v)} "
+                          "(section 7)")
         root_value = val.get(0)
         if not _same(pol.cost, nodes[0].value):
             self.fail([], f"policy cost is {pol.cost}, but the root's value is "
@@ -1173,32 +1263,52 @@ class _Validator:
             if got is not None and want is not None and not _same(got, want):
                 self.fail([], f"policy {name} is {got}, but the policy's "
                           f"{name.replace('_', '-')} cost is {_num(want)} (section 7)")
-        comms = sum(1 for n in nodes if n.kind in (INFORM, ASK) or n.told)
+        if order is None:
+            return
+        # counted in the tree unfolding, by the number of root paths reaching each node
+        reach = dict.fromkeys(order, 0)
+        reach[0] = 1
+        comms = leaves = 0
+        for n in reversed(order):  # parents first
+            for m in nodes[n].moves:
+                reach[m.to] += reach[n]
+                if m.kind in (INFORM, ASK) or m.told:
+                    comms += reach[n]
+            if not nodes[n].moves:
+                leaves += reach[n]
         if pol.communications != comms:
             self.fail([], f"communications is {pol.communications}, but the policy has "
-                      f"{comms} inform/ask moves and moves said with an inform")
-        leaves = sum(1 for n in nodes if not n.children)
+                      f"{comms} inform/ask moves and moves said with an inform (counted in "
+                      "its tree unfolding)")
         if pol.leaves != leaves:
-            self.fail([], f"leaves is {pol.leaves}, but the policy has {leaves} leaves")
+            self.fail([], f"leaves is {pol.leaves}, but the policy has {leaves} leaves in its "
+                      "tree unfolding (root-to-leaf branches)")
+
+    def reached_by(self, n: int) -> str:
+        """How node ``n`` was first reached: "start", or the move into it."""
+        path = self.paths().get(n)
+        return path[-1] if path else "start"
 
     def paths(self) -> dict[int, list[str]]:
+        """The path to each node: the one it was first checked by, else the first found."""
         nodes = self.policy.nodes
-        out: dict[int, list[str]] = {0: []}
-        stack = [0]
+        out: dict[int, list[str]] = {0: [], **self.path_of}
+        stack = list(out)
         while stack:
             n = stack.pop()
-            for c in nodes[n].children:
-                if 0 <= c < len(nodes) and c not in out:
-                    out[c] = [*out[n], f"{nodes[c].agent} {nodes[c].action}"]
-                    stack.append(c)
+            for m in nodes[n].moves:
+                if 0 <= m.to < len(nodes) and m.to not in out:
+                    out[m.to] = [*out[n], f"{m.agent} {m.action}"]
+                    stack.append(m.to)
         return out
 
-    def report(self) -> Report:
+    def report(self, order: list[int] | None = None) -> Report:
+        branches = self.branches_checked(order)
         if self.violations:
             return Report(False, self.violations[0], list(self.violations), self.nodes_checked,
-                          self.branches_checked)
-        return Report(True, f"valid: {self.nodes_checked} nodes, {self.branches_checked} "
-                      "branches checked", [], self.nodes_checked, self.branches_checked)
+                          branches)
+        return Report(True, f"valid: {self.nodes_checked} nodes, {branches} branches checked",
+                      [], self.nodes_checked, branches)
 
 
 __all__ = ["Report", "validate"]

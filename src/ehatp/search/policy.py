@@ -1,37 +1,69 @@
-"""Policy extraction: the robot policy chosen by the values, as a :class:`Policy` (the file
-format lives in :mod:`ehatp.policy_format`), and why no policy exists when none does."""
+"""Policy extraction: the robot policy chosen by the values, as a :class:`Policy` graph (the
+file format lives in :mod:`ehatp.policy_format`), and why no policy exists when none does."""
 
 from __future__ import annotations
 
 from typing import Any
 
-from ..epistemic.semantics import ACTION, ASK, INFORM, WAIT, Move, bits_of
+from ..epistemic.semantics import ACTION, WAIT, Move, bits_of
 from ..epistemic.state import ROBOT, EState
 from ..model.grounding import FINISH
 from ..model.options import Objective, ObjectiveKind
 from ..model.problem import Cost
-from ..policy_format import Policy, PolicyNode, num
-from .andor import GOAL, Graph
+from ..policy_format import Policy, PolicyMove, PolicyNode, num, topological_order
+from .andor import GOAL, Edge, Graph
 from .values import Values, weighted_mean
 
 
 def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
             optimal: bool = True, stats: dict[str, Any] | None = None) -> Policy:
-    """The policy the values chose, from ``root``, as a tree in preorder (docs/policy-format.md).
+    """The policy the values chose, from ``root``, as a graph (docs/policy-format.md): one
+    policy node per search node the policy reaches, memoised by search node, so the work and
+    the file are linear in the policy's distinct states however many branches share them.
+    Node ids are the depth-first preorder of first visits, moves in canonical order.
 
-    Both costs of §7 are computed again on the extracted tree: its worst case (the maximum over
+    Both costs of §7 are computed again on the extracted graph: its worst case (the maximum over
     human branches) and its expected cost (their weighted mean, ``[objective.weights]``); each
-    node's ``value`` and the policy's ``cost`` are the objective's."""
+    node's ``value`` and the policy's ``cost`` are the objective's. Branches and communications
+    are counted over the graph too (:meth:`Policy.count_branches`)."""
     sem = gr.sem
     g = sem.g
     p = g.problem
     r_name, h_name = p.domain.robot_name, p.domain.human_name
-    nodes: list[PolicyNode] = []
+
+    def chosen(n: int) -> list[Edge]:
+        if gr.status[n] == GOAL:
+            return []
+        edges = gr.edges[n]
+        return [edges[values.choice[n]]] if gr.is_robot(n) else list(edges)
+
+    # depth-first, first visits in preorder: a node reached again is not expanded again
+    order: list[int] = []
+    index: dict[int, int] = {}
+    stack = [root]
+    while stack:
+        n = stack.pop()
+        if n in index:
+            continue
+        index[n] = len(order)
+        order.append(n)
+        stack.extend(e.child for e in reversed(chosen(n)))
 
     def agenda(ag: tuple[int, ...]) -> list[str]:
         return [g.task_names[t] for t in ag if t != FINISH]
 
-    def make(n: int, move: Move | None, before: int = 0) -> PolicyNode:
+    def move_of(e: Edge, before: int) -> PolicyMove:
+        move: Move = e.move
+        name, call_args, label = sem.describe(move)
+        told: list[str] = []
+        if move.kind in (ACTION, WAIT) and move.atoms:  # said while acting (§5), as labelled
+            told = list(sem.literals(before, move.atoms))
+        return PolicyMove(agent=r_name if move.agent == ROBOT else h_name, kind=move.kind,
+                          action=label, name=name, args=list(call_args), cost=move.cost,
+                          to=index[e.child], told=told)
+
+    nodes: list[PolicyNode] = []
+    for i, n in enumerate(order):
         es: EState = gr.states[n]
         t = es.true
         div = 0
@@ -39,88 +71,50 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
         for s in sorted({s for s, _ in es.worlds}):
             div |= s ^ t
             diffs.append({"true": g.mask_atoms(s & ~t), "false": g.mask_atoms(t & ~s)})
-        cost: Cost = 0
-        told: list[str] = []
-        if move is None:
-            agent, kind, label, name, args = None, "start", "start", "start", []
-        else:
-            agent = r_name if move.agent == ROBOT else h_name
-            kind, cost = move.kind, move.cost
-            name, call_args, label = sem.describe(move)
-            args = list(call_args)
-            if kind in (ACTION, WAIT) and move.atoms:  # said while acting (§5), as labelled
-                told = list(sem.literals(before, move.atoms))
-        node = PolicyNode(
-            id=len(nodes), agent=agent, kind=kind, action=label, name=name, args=args,
-            cost=cost, copresent=sem.copresent(t), k=es.k, worlds=len(es.worlds),
-            divergence=[(a if t >> i & 1 else f"not {a}")
-                        for i, a in ((i, g.atoms[i]) for i in bits_of(div))],
+        goal = gr.status[n] == GOAL
+        nodes.append(PolicyNode(
+            id=i, copresent=sem.copresent(t), k=es.k, worlds=len(es.worlds),
+            divergence=[(a if t >> b & 1 else f"not {a}")
+                        for b, a in ((b, g.atoms[b]) for b in bits_of(div))],
             world_diffs=diffs, state=g.state_atoms(t), robot_agenda=agenda(es.robot_agenda),
             human_agenda=agenda(es.human_agenda),
-            to_move=None if gr.status[n] == GOAL else (r_name if es.turn == ROBOT else h_name),
-            value=0, goal=gr.status[n] == GOAL, told=told)
-        nodes.append(node)
-        return node
-
-    # iterative DFS in canonical child order; ids are preorder positions
-    root_node = make(root, None)
-    stack: list[tuple[int, PolicyNode]] = [(root, root_node)]
-    while stack:
-        n, pn = stack.pop()
-        if gr.status[n] == GOAL:
-            continue
-        edges = gr.edges[n]
-        chosen = [edges[values.choice[n]]] if gr.is_robot(n) else edges
-        kids = []
-        for e in chosen:
-            kids.append((e.child, make(e.child, e.move, gr.states[n].true)))
-        pn.children = [k.id for _, k in kids]
-        stack.extend(reversed(kids))
-    # renumber to preorder so ids read top-down
-    order: list[PolicyNode] = []
-    st = [nodes[0]]
-    while st:
-        x = st.pop()
-        order.append(x)
-        st.extend(reversed([nodes[i] for i in x.children]))
-    remap = {x.id: i for i, x in enumerate(order)}
-    for x in order:
-        x.id = remap[x.id]
-        x.children = [remap[c] for c in x.children]
-    leaves = sum(1 for x in order if not x.children)
-    comms = sum(1 for x in order if x.kind in (INFORM, ASK) or x.told)
+            to_move=None if goal else (r_name if es.turn == ROBOT else h_name),
+            value=0, goal=goal, moves=[move_of(e, t) for e in chosen(n)]))
     costs = {"inform": num(p.costs.inform), "ask": num(p.costs.ask),
              "wait": num(p.costs.wait), "pass": num(p.costs.pass_),
              "actions": {k: num(v) for k, v in sorted(p.costs.actions.items())}}
     obj = p.objective
-    worst, mean = tree_costs(order, obj)
+    worst, mean = graph_costs(nodes, obj)
     own = mean if obj.kind == ObjectiveKind.EXPECTED else worst
-    for x in order:
+    for x in nodes:
         x.value = own[x.id]
     objective = {"kind": obj.kind.value,
                  "weights": {k: num(v) for k, v in sorted(obj.weights.items())},
                  "ties": list(obj.ties)}
-    return Policy(problem_name, p.domain.name, {"robot": r_name, "human": h_name}, p.K, costs,
-                  order, own[0], comms, leaves, optimal, stats or {}, list(p.after), objective,
-                  worst[0], mean[0])
+    policy = Policy(problem_name, p.domain.name, {"robot": r_name, "human": h_name}, p.K,
+                    costs, nodes, own[0], 0, 0, optimal, stats or {}, list(p.after), objective,
+                    worst[0], mean[0])
+    policy.leaves = policy.count_branches()
+    policy.communications = policy.count_communications()
+    return policy
 
 
-def tree_costs(nodes: list[PolicyNode], objective: Objective) -> tuple[list[Cost], list[Cost]]:
-    """§7 on a policy tree in preorder: each node's worst-case and expected cost to the end
-    (the maximum, resp. the weighted mean, over a human node's branches; a robot node has one
-    child)."""
+def graph_costs(nodes: list[PolicyNode], objective: Objective) -> tuple[list[Cost], list[Cost]]:
+    """§7 on a policy graph: each node's worst-case and expected cost to the end (the maximum,
+    resp. the weighted mean, over a human node's moves; a robot node has one move), children
+    before parents."""
     worst: list[Cost] = [0] * len(nodes)
     mean: list[Cost] = [0] * len(nodes)
-    for x in reversed(nodes):  # preorder reversed: children first
-        if not x.children:
+    for i in reversed(topological_order(nodes)):
+        moves = nodes[i].moves
+        if not moves:
             continue
-        kids = [nodes[c] for c in x.children]
-        worst[x.id] = max(k.cost + worst[k.id] for k in kids)
-        if len(kids) == 1:
-            mean[x.id] = kids[0].cost + mean[kids[0].id]
+        worst[i] = max(m.cost + worst[m.to] for m in moves)
+        if len(moves) == 1:
+            mean[i] = moves[0].cost + mean[moves[0].to]
             continue
-        mean[x.id] = weighted_mean([objective.weight(k.action, k.name) for k in kids],
-                                   [k.cost + mean[k.id] for k in kids])
+        mean[i] = weighted_mean([objective.weight(m.action, m.name) for m in moves],
+                                [m.cost + mean[m.to] for m in moves])
     return worst, mean
 
 
@@ -164,4 +158,4 @@ def _why(path: list[str], reason: str) -> str:
     return (f"after {more}{steps}: {reason}" if path else reason)
 
 
-__all__ = ["explain_failure", "extract", "tree_costs"]
+__all__ = ["explain_failure", "extract", "graph_costs"]

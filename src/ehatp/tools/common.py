@@ -58,10 +58,11 @@ def user_errors(file: Path | str) -> Iterator[None]:
 
 
 def read_policy(path: Path | str, *, counts: bool = True) -> Policy:
-    """Read and check a policy file: :meth:`Policy.load`, then the type of every field the
-    tools read and (``counts``) whether the header's counts and the nodes' agents match the
-    tree, so a hand-edited or truncated file is one :class:`InputError` line instead of a
-    wrong display or a crash. (``validate`` leaves the counts to the validator.)"""
+    """Read and check a policy file (version 2, or 1 turned into a graph): :meth:`Policy.load`,
+    then the type of every field the tools read and (``counts``) whether the header's counts
+    and the moves' agents match the graph, so a hand-edited or truncated file is one
+    :class:`InputError` line instead of a wrong display or a crash. (``validate`` leaves the
+    counts to the validator.)"""
     try:
         policy = Policy.load(path)
     except (AttributeError, TypeError, KeyError, ValueError, IndexError, RecursionError) as e:
@@ -84,19 +85,27 @@ def _shape(path: Path | str) -> tuple[str, str] | None:
     for i, n in enumerate(nodes):
         if not isinstance(n, dict):
             return f"nodes[{i}]", f"a node must be an object, got {n!r:.40}"
+        moves = n.get("moves", [])
+        if not isinstance(moves, list):
+            return f"nodes[{i}].moves", "moves must be a list of move objects"
+        for j, m in enumerate(moves):
+            if not isinstance(m, dict):
+                return f"nodes[{i}].moves[{j}]", f"a move must be an object, got {m!r:.40}"
     return None
 
 
 _NODE_FIELDS: dict[str, tuple[str, str]] = {
     # field: (kind of value, how to say it)
-    "kind": ("str", "a string"), "action": ("str", "a string"), "name": ("str", "a string"),
-    "args": ("strs", "a list of strings"), "cost": ("num", "a number"),
     "copresent": ("bool", "true or false"), "k": ("int", "a whole number"),
     "worlds": ("int", "a whole number"), "divergence": ("strs", "a list of strings"),
     "state": ("strs", "a list of strings"), "robot_agenda": ("strs", "a list of strings"),
     "human_agenda": ("strs", "a list of strings"), "value": ("num", "a number"),
-    "goal": ("bool", "true or false"), "agent": ("str?", "a string or null"),
-    "to_move": ("str?", "a string or null"),
+    "goal": ("bool", "true or false"), "to_move": ("str?", "a string or null"),
+}
+_MOVE_FIELDS: dict[str, tuple[str, str]] = {
+    "agent": ("str", "a string"), "kind": ("str", "a string"), "action": ("str", "a string"),
+    "name": ("str", "a string"), "args": ("strs", "a list of strings"),
+    "cost": ("num", "a number"), "told": ("strs", "a list of strings"),
 }
 _TOP_FIELDS: dict[str, tuple[str, str]] = {
     "problem": ("str", "a string"), "domain": ("str", "a string"), "K": ("int", "a whole number"),
@@ -138,20 +147,30 @@ def check_policy(policy: Policy, name: str, *, counts: bool = True) -> None:
             v = getattr(node, f)
             if not _is(kind, v):
                 raise InputError(name, f"nodes[{i}].{f}", f"must be {say}, got {v!r:.40}", fix)
+        for j, move in enumerate(node.moves):
+            for f, (kind, say) in _MOVE_FIELDS.items():
+                v = getattr(move, f)
+                if not _is(kind, v):
+                    raise InputError(name, f"nodes[{i}].moves[{j}].{f}",
+                                     f"must be {say}, got {v!r:.40}", fix)
     if not counts:
         return
-    for i, node in enumerate(policy.nodes):
-        if (node.agent is None) != (i == 0) or (i and node.agent not in agents.values()):
-            raise InputError(name, f"nodes[{i}].agent",
-                             "the root has no agent and every other node is the robot's or "
-                             f"the human's ({agents['robot']}, {agents['human']})", fix)
-    leaves = sum(1 for n in policy.nodes if not n.children)
+    for node in policy.nodes:
+        for j, move in enumerate(node.moves):
+            if move.agent not in agents.values():
+                raise InputError(name, f"nodes[{node.id}].moves[{j}].agent",
+                                 f"every move is the robot's or the human's "
+                                 f"({agents['robot']}, {agents['human']}), not "
+                                 f"{move.agent!r:.40}", fix)
+    # counted over the graph: linear, however many branches share its nodes
+    leaves = policy.count_branches()
     if leaves != policy.leaves:
-        raise InputError(name, "leaves", f"says {policy.leaves}, but the tree has {leaves}", fix)
-    comms = sum(1 for n in policy.nodes if n.kind in ("inform", "ask"))
+        raise InputError(name, "leaves", f"says {policy.leaves}, but the policy has {leaves} "
+                         "branches", fix)
+    comms = policy.count_communications()
     if comms != policy.communications:
         raise InputError(name, "communications",
-                         f"says {policy.communications}, but the tree has {comms}", fix)
+                         f"says {policy.communications}, but the policy has {comms}", fix)
 
 
 def check_policy_problem(policy: Policy, policy_path: Path | str, problem: Problem) -> None:

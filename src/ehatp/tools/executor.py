@@ -1,6 +1,6 @@
 """Drive one execution of a robot policy, step by step, for a robot controller or a simulator.
 
-:class:`Executor` walks the policy tree while it tracks the epistemic state with the
+:class:`Executor` walks the policy graph, move by move, while it tracks the epistemic state with the
 :class:`~ehatp.epistemic.semantics.Semantics` of the problem, so both views are checked against
 each other at every step. The robot asks :meth:`Executor.next_robot_action`, does it, and reports
 it with :meth:`Executor.robot_action_done`; what the human does is reported with
@@ -146,7 +146,7 @@ class Executor:
     @property
     def done(self) -> bool:
         """The policy has reached one of its leaves (a goal)."""
-        return self.node is not None and not self.node.children
+        return self.node is not None and not self.node.moves
 
     @property
     def goal_reached(self) -> bool:
@@ -198,11 +198,12 @@ class Executor:
             return [self._action(self._follow(self._opening[0]))]
         by_label = {_norm(m.label): m for m in self.sem.moves(self.state)}
         out = []
-        for c in self.policy.children(self.node):
-            m = by_label.get(_norm(c.action))
+        for pm in self.node.moves:
+            m = by_label.get(_norm(pm.action))
             if m is None:
-                raise PolicyMismatch(f"policy node {c.id} has {self.human_name} "
-                                     f"{c.action}, which is not a move of {self.human_name} here")
+                raise PolicyMismatch(f"policy node {self.node.id} has a move {self.human_name} "
+                                     f"{pm.action} (to node {pm.to}), which is not a move of "
+                                     f"{self.human_name} here")
             out.append(self._action(m))
         return out
 
@@ -352,15 +353,15 @@ class Executor:
     def _robot_move(self) -> Move:
         if self.node is None:
             return self._follow(self._opening[0])
-        kids = self.policy.children(self.node)
-        if len(kids) != 1:
+        moves = self.node.moves
+        if len(moves) != 1:
             raise PolicyMismatch(f"policy node {self.node.id} is a robot node with "
-                                 f"{len(kids)} children, not 1")
-        label = kids[0].action
+                                 f"{len(moves)} moves, not 1")
+        label = moves[0].action
         move = next((m for m in self.sem.moves(self.state) if _norm(m.label) == _norm(label)),
                     None)
         if move is None or move.child is None:
-            raise PolicyMismatch(f"policy node {kids[0].id} says {self.robot_name} {label}, "
+            raise PolicyMismatch(f"policy node {self.node.id} says {self.robot_name} {label}, "
                                  f"which is not a move of {self.robot_name} here; "
                                  "the policy does not fit this problem")
         return move
@@ -380,8 +381,10 @@ class Executor:
                 node = self.node
         else:
             assert self.node is not None
-            node = next(c for c in self.policy.children(self.node)
-                        if _norm(c.action) == _norm(move.label))
+            # the policy's move with this label: the node it leads to may be shared by
+            # other paths, the tracked state is checked against it all the same
+            pm = next(m for m in self.node.moves if _norm(m.action) == _norm(move.label))
+            node = self.policy.nodes[pm.to]
             self.node = node
             self._check(node)
         step = Step(len(self.history) + 1, self._action(move), before, self.state, node,

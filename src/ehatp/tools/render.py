@@ -1,11 +1,13 @@
 """`ehatp render`: draw a robot policy as Graphviz DOT / SVG or as an offline HTML explorer.
 
 DOT is always available (built with the ``graphviz`` Python package, which needs no binary);
-SVG pipes that DOT through Graphviz's ``dot`` program. Big policies are collapsed by
-:func:`plan_view`: identical subtrees (same content all the way down) are drawn once, and a
-depth cap and a node budget fold what is left into "… N more" stubs. The HTML explorer is one
-file: the template, CSS and JS under ``explorer/`` are inlined and the policy JSON embedded, so
-it works offline. See ``docs/rendering.md``.
+SVG pipes that DOT through Graphviz's ``dot`` program. The policy is a graph
+(docs/policy-format.md) and is drawn as one: each node once, with an edge per move, so a node
+reached by several paths has several parents. Big policies are collapsed by :func:`plan_view`:
+distinct nodes with identical content all the way down are drawn once, and a depth cap and a
+node budget fold what is left into "… N more" stubs. The HTML explorer is one file: the
+template, CSS and JS under ``explorer/`` are inlined and the policy JSON embedded, so it works
+offline. See ``docs/rendering.md``.
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ import typer
 
 from ..errors import InputError
 from ..model.problem import load
-from ..policy_format import Policy, PolicyNode
+from ..policy_format import Policy, PolicyMove, PolicyNode
 from .common import Commands, check_policy_problem, die, read_policy, user_errors
 
 DEFAULT_MAX_NODES = 400  # more than this and a drawing stops being readable
@@ -58,109 +60,113 @@ class DotMissing(Exception):
 
 @dataclass
 class View:
-    """What to draw: policy node ids (a representative for shared subtrees) and edges."""
+    """What to draw: policy node ids (a representative for merged identical subgraphs) and
+    moves as edges."""
 
     nodes: list[int]  # drawn node ids, breadth-first
-    edges: list[tuple[int, int]]
-    folded: dict[int, int] = field(default_factory=dict)  # drawn id -> policy nodes not drawn
-    stands_for: dict[int, int] = field(default_factory=dict)  # drawn id -> copies it stands for
+    edges: list[tuple[int, int, int]]  # (from, to, index of the move in the from node's moves)
+    folded: dict[int, int] = field(default_factory=dict)  # drawn id -> nodes not drawn below
+    stands_for: dict[int, int] = field(default_factory=dict)  # drawn id -> its copies in the tree
     notes: list[str] = field(default_factory=list)
+    # drawn id -> the moves into it, from anywhere in the policy (into the nodes it stands for)
+    entering: dict[int, list[PolicyMove]] = field(default_factory=dict)
 
     @property
     def collapsed(self) -> bool:
         return bool(self.notes)
 
 
-def _postorder(policy: Policy) -> list[int]:
-    order: list[int] = []
-    stack = [(0, False)]
-    while stack:
-        i, done = stack.pop()
-        if done:
-            order.append(i)
-            continue
-        stack.append((i, True))
-        stack.extend((c, False) for c in reversed(policy.nodes[i].children))
-    return order
-
-
-def subtree_hashes(policy: Policy) -> list[str]:
-    """A content hash per node covering everything in its subtree except the ids."""
+def subgraph_hashes(policy: Policy) -> list[str]:
+    """A content hash per node covering everything below it (nodes and moves) except the ids,
+    children before parents: linear in the graph."""
     out = [""] * len(policy.nodes)
-    for i in _postorder(policy):
+    for i in reversed(policy.topological_order()):
         node = policy.nodes[i]
-        own = {k: v for k, v in node.to_dict().items() if k not in ("id", "children")}
+        own = {k: v for k, v in node.to_dict().items() if k not in ("id", "moves")}
         h = hashlib.sha256(json.dumps(own, sort_keys=True, default=str).encode())
-        for c in node.children:
-            h.update(out[c].encode())
+        for m in node.moves:
+            move = {k: v for k, v in m.to_dict().items() if k != "to"}
+            h.update(json.dumps(move, sort_keys=True, default=str).encode())
+            h.update(out[m.to].encode())
         out[i] = h.hexdigest()
     return out
 
 
-def subtree_sizes(policy: Policy) -> list[int]:
-    sizes = [1] * len(policy.nodes)
-    for i in _postorder(policy):
-        sizes[i] += sum(sizes[c] for c in policy.nodes[i].children)
-    return sizes
+def _below(policy: Policy, canon: list[int], start: int, drawn: set[int]) -> int:
+    """Distinct (representative) nodes below ``start`` that are not drawn."""
+    seen: set[int] = set()
+    stack = [start]
+    while stack:
+        for m in policy.nodes[stack.pop()].moves:
+            k = canon[m.to]
+            if k not in seen and k not in drawn:
+                seen.add(k)
+                stack.append(k)
+    return len(seen)
 
 
 def plan_view(policy: Policy, *, max_depth: int | None = None,
               max_nodes: int | None = DEFAULT_MAX_NODES, share: bool | None = None) -> View:
     """Decide what to draw.
 
-    ``share`` None shares identical subtrees only when the tree is over ``max_nodes``. Then a
-    breadth-first walk draws nodes down to ``max_depth`` and while the budget lasts; a node
-    whose children do not all fit is drawn with a stub counting what is folded below it (all
-    children or none, so a human choice is never shown half-expanded).
+    ``share`` None merges distinct nodes with identical subgraphs only when the policy is over
+    ``max_nodes``. Then a breadth-first walk draws nodes down to ``max_depth`` and while the
+    budget lasts; a node whose children do not all fit is drawn with a stub counting the nodes
+    folded below it (all children or none, so a human choice is never shown half-expanded).
     """
     total = len(policy.nodes)
     if share is None:
         share = max_nodes is not None and total > max_nodes
-    sizes = subtree_sizes(policy)
     canon = list(range(total))
-    copies: dict[int, int] = {}
     notes: list[str] = []
     if share:
         first: dict[str, int] = {}
-        for i, h in enumerate(subtree_hashes(policy)):
+        for i, h in enumerate(subgraph_hashes(policy)):
             canon[i] = first.setdefault(h, i)
-            copies[canon[i]] = copies.get(canon[i], 0) + 1
-        distinct = len(first)
-        if distinct < total:
-            notes.append(f"identical subtrees drawn once ({total} policy nodes, "
-                         f"{distinct} distinct)")
+        if len(first) < total:
+            notes.append(f"identical subgraphs drawn once ({total} policy nodes, "
+                         f"{len(first)} distinct)")
+    copies: dict[int, int] = {}
+    for i, n in enumerate(policy.path_counts()):
+        copies[canon[i]] = copies.get(canon[i], 0) + n
     depth = {0: 0}
     order = [0]
-    edges: list[tuple[int, int]] = []
-    folded: dict[int, int] = {}
+    edges: list[tuple[int, int, int]] = []
+    cut: list[int] = []
     cut_depth = cut_budget = 0
     queue = deque([0])
     while queue:
         i = queue.popleft()
-        kids = [canon[c] for c in policy.nodes[i].children]
+        kids = [canon[m.to] for m in policy.nodes[i].moves]
         if not kids:
             continue
         new = list(dict.fromkeys(k for k in kids if k not in depth))
         if max_depth is not None and depth[i] >= max_depth:
-            folded[i] = sizes[i] - 1
+            cut.append(i)
             cut_depth += 1
             continue
         if max_nodes is not None and len(order) + len(new) > max_nodes:
-            folded[i] = sizes[i] - 1
+            cut.append(i)
             cut_budget += 1
             continue
-        for k in dict.fromkeys(kids):
-            edges.append((i, k))
+        edges.extend((i, k, j) for j, k in enumerate(kids))
         for k in new:
             depth[k] = depth[i] + 1
             order.append(k)
             queue.append(k)
+    drawn = set(order)
+    # a folded node may have children drawn through another parent: it still gets its stub
+    folded = {i: _below(policy, canon, i, drawn) for i in cut}
     if cut_depth:
-        notes.append(f"cut at depth {max_depth} ({cut_depth} subtree(s) folded)")
+        notes.append(f"cut at depth {max_depth} ({cut_depth} node(s) folded)")
     if cut_budget:
-        notes.append(f"node budget {max_nodes} reached ({cut_budget} subtree(s) folded)")
+        notes.append(f"node budget {max_nodes} reached ({cut_budget} node(s) folded)")
     stands_for = {i: copies[i] for i in order if copies.get(i, 1) > 1}
-    return View(order, edges, folded, stands_for, notes)
+    entering: dict[int, list[PolicyMove]] = {}
+    for _, m in policy.edges():
+        if canon[m.to] in drawn:
+            entering.setdefault(canon[m.to], []).append(m)
+    return View(order, edges, folded, stands_for, notes, entering)
 
 
 # --------------------------------------------------------------------------- DOT / SVG
@@ -184,20 +190,47 @@ def worlds_text(n: PolicyNode) -> str:
     return f"{n.worlds} world" + ("" if n.worlds == 1 else "s")
 
 
-def node_attrs(policy: Policy, n: PolicyNode, copies: int = 1) -> dict[str, str]:
-    """Shape, colours, label and tooltip of one drawn policy node."""
-    human = n.agent == policy.agents["human"]
-    if n.kind == "start":
+def k_text(policy: Policy, n: PolicyNode) -> str:
+    """The K-counter against the bound: ``k=1/2`` is one robot turn unseen of K = 2."""
+    return f"k={n.k}/{policy.K}"
+
+
+def entry_move(moves: list[PolicyMove]) -> PolicyMove | None:
+    """The move a node is drawn with: the one every path takes into it, or None when they
+    differ (then each edge is labelled with its own move)."""
+    if not moves:
+        return None
+    first = moves[0]
+    same = all((m.agent, m.kind, m.action) == (first.agent, first.kind, first.action)
+               for m in moves)
+    return first if same else None
+
+
+def node_attrs(policy: Policy, n: PolicyNode, entered: list[PolicyMove],
+               copies: int = 1) -> dict[str, str]:
+    """Shape, colours, label and tooltip of one drawn policy node, reached by the moves
+    ``entered`` (none at the root)."""
+    move = entry_move(entered)
+    agent = entered[0].agent if entered else None
+    kinds = {m.kind for m in entered}
+    kind = kinds.pop() if len(kinds) == 1 else None  # styled by the moves' kind, if one
+    human = agent == policy.agents["human"]
+    if n.id == 0:
         attrs = dict(_START_STYLE)
-    elif n.kind in COMM_KINDS:
+    elif kind in COMM_KINDS:
         attrs = dict(_COMM_STYLE)
     else:
         attrs = dict(_HUMAN_STYLE if human else _ROBOT_STYLE)
-        if n.kind in IDLE_KINDS:
+        if kind in IDLE_KINDS:
             attrs["style"] += ",dashed"
             attrs["fillcolor"] = "#f3f3f3"
-    head = n.action if n.agent is None else f"{n.agent}: {n.action}"
-    info = [worlds_text(n), f"K={n.k}"]
+    if n.id == 0:
+        head = "start"
+    elif move is None:  # reached by different moves: each labels its edge
+        head = f"{agent}: one of {len(entered)} moves (on the edges)"
+    else:
+        head = f"{move.agent}: {move.action}"
+    info = [worlds_text(n), k_text(policy, n)]
     if not n.copresent:
         info.append("apart")
     lines = [head, " · ".join(info)]
@@ -208,37 +241,44 @@ def node_attrs(policy: Policy, n: PolicyNode, copies: int = 1) -> dict[str, str]
     if copies > 1:
         lines.append(f"(×{copies})")
     attrs["label"] = "\\n".join(_dot_text(x) for x in lines)
+    cost = "" if move is None and n.id else f"cost {0 if move is None else move.cost}, "
     attrs["tooltip"] = _dot_text(
-        f"node {n.id}: cost {n.cost}, cost to go {n.value}, "
+        f"node {n.id}: {cost}cost to go {n.value}, "
         f"{'together' if n.copresent else 'apart'}; true: {', '.join(n.state)}")
     attrs["id"] = f"policy_node_{n.id}"  # Graphviz escapes "-" in SVG ids
     return attrs
 
 
 def to_dot(policy: Policy, view: View | None = None) -> graphviz.Digraph:
-    """The policy (or the part ``view`` keeps) as a Graphviz digraph, one node per policy node."""
+    """The policy (or the part ``view`` keeps) as a Graphviz digraph: one node per policy node,
+    one edge per move."""
     view = view or plan_view(policy, max_nodes=None, share=False)
     title = (f"{policy.problem} ({policy.domain}): worst-case cost {policy.cost}, "
-             f"{policy.leaves} branches, {policy.communications} communication(s)")
+             f"{policy.leaves} branches, {policy.communications} communication(s); "
+             f"{len(policy.nodes)} nodes")
     label = "\\l".join(_dot_text(x) for x in [title, *(f"collapsed: {t}" for t in view.notes)])
     g = graphviz.Digraph(name=re.sub(r"\W", "_", policy.problem) or "policy")
     g.attr(rankdir="TB", labelloc="t", labeljust="l", label=label + "\\l",
            fontname="Helvetica", fontsize="12")
     g.attr("node", fontname="Helvetica", fontsize="10", margin="0.08,0.04")
-    g.attr("edge", color="#666666", arrowsize="0.6")
+    g.attr("edge", color="#666666", arrowsize="0.6", fontname="Helvetica", fontsize="9")
+    into = view.entering
     for i in view.nodes:
-        g.node(f"n{i}", **node_attrs(policy, policy.nodes[i], view.stands_for.get(i, 1)))
+        g.node(f"n{i}", **node_attrs(policy, policy.nodes[i], into.get(i, []),
+                                     view.stands_for.get(i, 1)))
         if i in view.folded:
             g.node(f"more{i}", label=f"… {view.folded[i]} more", shape="note",
                    style="dashed", color="#888888", fontcolor="#555555")
             g.edge(f"n{i}", f"more{i}", style="dashed", color="#888888")
     human = policy.agents["human"]
-    for a, b in view.edges:
-        # human moves are the uncontrollable branches: dashed and orange
-        if policy.nodes[b].agent == human:
-            g.edge(f"n{a}", f"n{b}", style="dashed", color="#a35200")
-        else:
-            g.edge(f"n{a}", f"n{b}")
+    for a, b, j in view.edges:
+        m = policy.nodes[a].moves[j]
+        attrs: dict[str, str] = {}
+        if m.agent == human:  # human moves are the uncontrollable branches: dashed, orange
+            attrs.update(style="dashed", color="#a35200")
+        if entry_move(into.get(b, [])) is None:
+            attrs["label"] = _dot_text(m.action)
+        g.edge(f"n{a}", f"n{b}", **attrs)
     return g
 
 

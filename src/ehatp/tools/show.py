@@ -1,5 +1,10 @@
 """Read a policy JSON and print it as an indented tree plus one timeline per branch.
 
+The policy is a graph (docs/policy-format.md): the tree is printed depth-first, each node
+expanded once, where the depth-first walk first reaches it; a move into a node already printed
+is one line ending ``→ see node N``. The output is linear in the policy's nodes and moves;
+timelines, one per branch, stop after :data:`MAX_TIMELINES` branches.
+
 The output is built once as styled segments; :func:`plain` turns it into ASCII text (pipes,
 files, tests) and :func:`print_rich` colours it on a terminal, so both show the same thing.
 """
@@ -16,9 +21,10 @@ from rich.console import Console
 from rich.text import Text
 
 from ..model.problem import Problem
-from ..policy_format import Policy, PolicyNode, timeline
+from ..policy_format import Policy, PolicyMove, PolicyNode, timeline
 
 COMM_KINDS = ("inform", "ask")
+MAX_TIMELINES = 100  # branches whose timelines are printed; there can be exponentially many
 
 # tree guides: (plain, unicode)
 _GUIDES = {"branch": ("+- ", "├─ "), "last": ("`- ", "└─ "), "pipe": ("|  ", "│  "),
@@ -72,11 +78,22 @@ def _role(policy: Policy, agent: str | None) -> str:
     return "human" if agent == policy.agents["human"] else "start"
 
 
-def _node_segments(policy: Policy, n: PolicyNode, width: int, name_w: int) -> list[Segment]:
-    role = _role(policy, n.agent)
-    comm = n.kind in COMM_KINDS
-    segs: list[Segment] = [(f"#{n.id:<4}", "dim"), ((n.agent or "").ljust(name_w) + "  ", role)]
-    segs.append((n.action.ljust(width), "bold yellow" if comm else ""))
+def _move_segments(policy: Policy, move: PolicyMove | None, width: int,
+                   name_w: int) -> list[Segment]:
+    agent = None if move is None else move.agent
+    action = "start" if move is None else move.action
+    return [((agent or "").ljust(name_w) + "  ", _role(policy, agent)),
+            (action.ljust(width), "bold yellow" if _comm(move) else "")]
+
+
+def _comm(move: PolicyMove | None) -> bool:
+    return move is not None and move.kind in COMM_KINDS
+
+
+def _node_segments(policy: Policy, move: PolicyMove | None, n: PolicyNode, width: int,
+                   name_w: int) -> list[Segment]:
+    comm = _comm(move)
+    segs: list[Segment] = [(f"#{n.id:<4}", "dim"), *_move_segments(policy, move, width, name_w)]
     segs.append((f"  W={n.worlds}", "cyan" if n.worlds > 1 else "dim"))
     if not n.copresent:
         segs.append(("  apart", "blue"))
@@ -113,48 +130,72 @@ def header(policy: Policy) -> list[Line]:
         lines.append(Line((), [(f"search: {st.get('generated', '?')} states generated, "
                                 f"{st.get('distinct', '?')} distinct, "
                                 f"|W| up to {st.get('max_worlds', '?')}", "dim")]))
+    moves = sum(len(n.moves) for n in policy.nodes)
+    lines.append(Line((), [(f"graph: {len(policy.nodes)} nodes, {moves} moves "
+                            f"({policy.tree_size()} nodes as a tree)", "dim")]))
     lines.append(Line((), [(f"legend: {r} = robot, {h} = human, COMM = communication, "
                             "GOAL = goal reached, W = worlds the human entertains, "
-                            "apart = not co-present", "dim")]))
+                            "apart = not co-present, → see node N = a node printed above "
+                            "(reached by several paths)", "dim")]))
     return lines
 
 
 def tree_lines(policy: Policy, details: bool = False) -> list[Line]:
-    """The policy tree; straight runs stay at one indent, only human choices nest."""
-    width = max(len(n.action) for n in policy.nodes)
+    """The policy as a tree; straight runs stay at one indent, only human choices nest. Each
+    node is expanded once, at its first line; a later move into it says ``→ see node N``."""
+    width = max([len("start"), *(len(m.action) for _, m in policy.edges())])
     name_w = max(len(a) for a in policy.agents.values())
     out: list[Line] = []
-    # (node, guides for its first line, guides for the lines after it)
-    stack: list[tuple[int, tuple[str, ...], tuple[str, ...]]] = [(0, (), ())]
+    printed: set[int] = set()
+    # (move into the node, None at the root; node id; guides for its first line; guides for
+    # the lines after it)
+    stack: list[tuple[PolicyMove | None, int, tuple[str, ...], tuple[str, ...]]] = [
+        (None, 0, (), ())]
     while stack:
-        i, first, rest = stack.pop()
-        guides = first
+        move, i, guides, rest = stack.pop()
+        fork: PolicyNode | None = None
         while True:
+            if i in printed:  # shared: printed above, with everything below it
+                segs = [(" " * 5, ""), *_move_segments(policy, move, width, name_w),
+                        (f"  → see node {i}", "dim")]
+                if _comm(move):
+                    segs.append(("  COMM", "bold yellow"))
+                out.append(Line(guides, segs))
+                break
+            printed.add(i)
             n = policy.nodes[i]
-            out.append(Line(guides, _node_segments(policy, n, width, name_w)))
+            out.append(Line(guides, _node_segments(policy, move, n, width, name_w)))
             if details and (d := _detail_segments(n)):
                 out.append(Line(rest, d))
             guides = rest
-            if len(n.children) != 1:
+            if len(n.moves) != 1:
+                fork = n if n.moves else None
                 break
-            i = n.children[0]
-        if len(n.children) > 1:
-            who = n.to_move or "?"
-            out.append(Line(rest, [(f"{who} may do one of {len(n.children)}:", "italic")]))
-            kids = n.children
-            for j in reversed(range(len(kids))):
-                last = j == len(kids) - 1
-                stack.append((kids[j], (*rest, "last" if last else "branch"),
-                              (*rest, "space" if last else "pipe")))
+            move, i = n.moves[0], n.moves[0].to
+        if fork is None:
+            continue
+        out.append(Line(rest, [(f"{fork.to_move or '?'} may do one of {len(fork.moves)}:",
+                                "italic")]))
+        for j in reversed(range(len(fork.moves))):
+            last = j == len(fork.moves) - 1
+            m = fork.moves[j]
+            stack.append((m, m.to, (*rest, "last" if last else "branch"),
+                          (*rest, "space" if last else "pipe")))
     return out
 
 
-def timeline_lines(policy: Policy) -> list[Line]:
-    """One numbered timeline per branch: turns while together, lanes while apart."""
-    branches = policy.branches()
-    out = [Line((), [(f"Timelines ({len(branches)} branches)", "bold")])]
+def timeline_lines(policy: Policy, limit: int | None = MAX_TIMELINES) -> list[Line]:
+    """One numbered timeline per branch (the first ``limit`` of them): turns while together,
+    lanes while apart."""
+    total = policy.leaves
+    shown = total if limit is None else min(total, limit)
+    title = f"Timelines ({total} branches" + (
+        f"; the first {shown} are shown)" if shown < total else ")")
+    out = [Line((), [(title, "bold")])]
     name_w = max(len(a) for a in policy.agents.values())
-    for b, path in enumerate(branches, 1):
+    for b, path in enumerate(policy.iter_branches(), 1):
+        if limit is not None and b > limit:
+            break
         tl = timeline(policy, path)
         cost = sum(n.cost for n in path)
         leaf = path[-1]
@@ -176,22 +217,31 @@ def timeline_lines(policy: Policy) -> list[Line]:
                 out.append(Line((), [(num, ""),
                                      (agent.ljust(name_w) + "  ", _role(policy, agent)),
                                      (step["action"], "")]))
+    if shown < total:
+        out.append(Line((), [(f"... and {total - shown} more branches: the policy's graph "
+                              "above covers them all; `ehatp render --format html` shows any "
+                              "branch", "dim")]))
     return out
 
 
 def policy_lines(policy: Policy, *, tree: bool = True, timelines: bool = True,
-                 details: bool = False) -> list[Line]:
+                 details: bool = False, max_timelines: int | None = MAX_TIMELINES
+                 ) -> list[Line]:
     lines = header(policy)
     if tree:
         lines += [Line((), []), Line((), [("Tree", "bold")]), *tree_lines(policy, details)]
     if timelines:
-        lines += [Line((), []), *timeline_lines(policy)]
+        lines += [Line((), []), *timeline_lines(policy, max_timelines)]
     return lines
+
+
+_ASCII = str.maketrans({"→": "->"})
 
 
 def plain(lines: Sequence[Line]) -> str:
     return "\n".join(
-        ("".join(_GUIDES[g][0] for g in ln.guides) + "".join(t for t, _ in ln.segments)).rstrip()
+        ("".join(_GUIDES[g][0] for g in ln.guides)
+         + "".join(t for t, _ in ln.segments).translate(_ASCII)).rstrip()
         for ln in lines) + "\n"
 
 
@@ -208,5 +258,5 @@ def print_rich(lines: Sequence[Line], console: Console) -> None:
         console.print(text, soft_wrap=True, highlight=False)
 
 
-__all__ = ["Line", "cost_lines", "fmt_cost", "fmt_exact", "header", "plain", "policy_lines",
-           "print_notes", "print_rich", "timeline_lines", "tree_lines"]
+__all__ = ["MAX_TIMELINES", "Line", "cost_lines", "fmt_cost", "fmt_exact", "header", "plain",
+           "policy_lines", "print_notes", "print_rich", "timeline_lines", "tree_lines"]

@@ -7,36 +7,48 @@
   const $ = (id) => document.getElementById(id);
   const policy = JSON.parse($("policy-data").textContent);
   const config = JSON.parse($("explorer-config").textContent);
-  const nodes = policy.nodes;
-  const byId = new Map(nodes.map((n) => [n.id, n]));
+  const nodes = policy.nodes; // a graph: nodes[i].moves[j] = {agent, action, cost, kind, to, ...}
   const ROBOT = policy.agents.robot;
   const HUMAN = policy.agents.human;
   const COMM = new Set(["inform", "ask"]);
   const IDLE = new Set(["wait", "pass"]);
 
-  // box size and grid step of the tree drawing (SVG user units)
-  const W = 150, H = 38, DX = 166, DY = 70;
+  // box size and grid step of the tree drawing (SVG user units); the drawing opens at a scale
+  // of at least MIN_SCALE screen pixels per unit, so the smallest text (11 units) reads >= 11 px
+  // and at most SCREENS pane widths wide (the rest starts folded)
+  const W = 160, H = 40, DX = 176, DY = 74, MIN_SCALE = 1, SCREENS = 3;
 
-  // parents, depths and subtree sizes, without recursion (policies can be deep)
-  const parentOf = new Map();
-  const depthOf = new Map([[0, 0]]);
-  const sizeOf = new Map();
-  const preorder = [];
-  for (const stack = [0]; stack.length;) {
-    const id = stack.pop();
-    preorder.push(id);
-    const kids = byId.get(id).children;
-    for (let i = kids.length - 1; i >= 0; i--) {
-      parentOf.set(kids[i], id);
-      depthOf.set(kids[i], depthOf.get(id) + 1);
-      stack.push(kids[i]);
+  // The policy is a graph (docs/policy-format.md); it is drawn as a tree of *items*, one per
+  // move plus the root, depth-first in move order. A node is expanded at its first item (in
+  // id order, since ids are that same preorder); every later move into it is a reference item
+  // with no children that links to the first copy. Items are linear in the graph's size.
+  const items = []; // {node, move, parent, kids, ref}
+  const firstItem = new Map(); // node id -> its expanded item
+  for (const stack = [{ node: 0, move: null, parent: -1 }]; stack.length;) {
+    const x = stack.pop();
+    const idx = items.length;
+    const ref = firstItem.has(x.node);
+    items.push({ node: x.node, move: x.move, parent: x.parent, kids: [], ref, depth: 0 });
+    if (x.parent >= 0) {
+      items[idx].depth = items[x.parent].depth + 1;
+      items[x.parent].kids.push(idx);
+    }
+    if (ref) continue;
+    firstItem.set(x.node, idx);
+    const moves = nodes[x.node].moves;
+    for (let j = moves.length - 1; j >= 0; j--) {
+      stack.push({ node: moves[j].to, move: moves[j], parent: idx });
     }
   }
-  for (let i = preorder.length - 1; i >= 0; i--) {
-    const id = preorder[i];
-    let s = 1;
-    for (const c of byId.get(id).children) s += sizeOf.get(c);
-    sizeOf.set(id, s);
+  const sizeOf = new Array(items.length).fill(1); // items below, folded or not
+  for (let i = items.length - 1; i > 0; i--) sizeOf[items[i].parent] += sizeOf[i];
+  const parentsOf = new Map(); // node id -> ids of the nodes with a move into it
+  for (const n of nodes) {
+    for (const m of n.moves) {
+      if (!parentsOf.has(m.to)) parentsOf.set(m.to, []);
+      const ps = parentsOf.get(m.to);
+      if (!ps.includes(n.id)) ps.push(n.id);
+    }
   }
 
   const svg = $("tree");
@@ -44,9 +56,9 @@
   const gEdges = $("edges");
   const gNodes = $("nodes");
 
-  const collapsed = new Set();
-  let selected = null;
-  let pos = new Map();
+  const collapsed = new Set(); // item indices
+  let selected = null; // item index
+  let pos = new Map(); // item index -> {x, y}
   let visibleCount = 0;
   let vb = { x: 0, y: 0, w: 1000, h: 600 };
 
@@ -66,16 +78,22 @@
   }
 
   const plural = (n, word) => `${n} ${word}${n === 1 ? "" : "s"}`;
-  const label = (n) => (n.agent ? `${n.agent}: ${n.action}` : n.action);
+  const moveLabel = (m) => (m ? `${m.agent}: ${m.action}` : "start");
+  const label = (it) => moveLabel(items[it].move);
   const role = (agent) => (agent === ROBOT ? "robot" : agent === HUMAN ? "human" : "");
-  const shownLeaf = (id) => collapsed.has(id) || byId.get(id).children.length === 0;
+  const kindOf = (it) => (items[it].move ? items[it].move.kind : "start");
+  const nodeOf = (it) => nodes[items[it].node];
+  const shownLeaf = (it) => collapsed.has(it) || items[it].kids.length === 0;
+  const kText = (n) => `k=${n.k}/${policy.K}`; // unseen robot turns of the bound K
 
-  function kindClasses(n) {
+  function kindClasses(it) {
     const c = ["node"];
-    if (n.kind === "start") c.push("start");
-    else c.push(role(n.agent));
-    if (COMM.has(n.kind)) c.push("comm");
-    if (IDLE.has(n.kind)) c.push("idle");
+    const m = items[it].move, n = nodeOf(it);
+    if (!m) c.push("start");
+    else c.push(role(m.agent));
+    if (m && COMM.has(m.kind)) c.push("comm");
+    if (m && IDLE.has(m.kind)) c.push("idle");
+    if (items[it].ref) c.push("ref");
     if (n.goal) c.push("goal");
     if (!n.copresent) c.push("apart");
     if (n.worlds > 1) c.push("multi");
@@ -85,21 +103,24 @@
   // ------------------------------------------------------------------ folding and layout
 
   function initialFolding() {
-    // fold below the depth cap and where the breadth-first budget runs out
+    // fold below the depth cap, where the breadth-first budget runs out, and where the tree
+    // would get wider than a few screens at the readable scale (a column per shown leaf)
     const maxDepth = config.maxDepth, budget = config.maxNodes;
-    let shown = 1;
+    const maxColumns = Math.max(4, Math.floor(SCREENS * (svg.clientWidth || 1000) / MIN_SCALE / DX));
+    let shown = 1, columns = 1;
     const queue = [0];
     for (let q = 0; q < queue.length; q++) {
-      const id = queue[q];
-      const kids = byId.get(id).children;
+      const it = queue[q];
+      const kids = items[it].kids;
       if (!kids.length) continue;
-      const deep = maxDepth !== null && maxDepth !== undefined && depthOf.get(id) >= maxDepth;
+      const deep = maxDepth !== null && maxDepth !== undefined && items[it].depth >= maxDepth;
       const full = budget !== null && budget !== undefined && shown + kids.length > budget;
-      if (deep || full) {
-        collapsed.add(id);
+      if (deep || full || columns + kids.length - 1 > maxColumns) {
+        collapsed.add(it);
         continue;
       }
       shown += kids.length;
+      columns += kids.length - 1;
       queue.push(...kids);
     }
   }
@@ -109,29 +130,29 @@
     pos = new Map();
     const visible = [];
     for (const stack = [0]; stack.length;) {
-      const id = stack.pop();
-      visible.push(id);
-      if (collapsed.has(id)) continue;
-      const kids = byId.get(id).children;
+      const it = stack.pop();
+      visible.push(it);
+      if (collapsed.has(it)) continue;
+      const kids = items[it].kids;
       for (let i = kids.length - 1; i >= 0; i--) stack.push(kids[i]);
     }
     let column = 0;
-    for (const id of visible) {
-      if (shownLeaf(id)) pos.set(id, { x: column++ * DX, y: depthOf.get(id) * DY });
+    for (const it of visible) {
+      if (shownLeaf(it)) pos.set(it, { x: column++ * DX, y: items[it].depth * DY });
     }
     for (let i = visible.length - 1; i >= 0; i--) {
-      const id = visible[i];
-      if (shownLeaf(id)) continue;
-      const kids = byId.get(id).children;
+      const it = visible[i];
+      if (shownLeaf(it)) continue;
+      const kids = items[it].kids;
       const x = (pos.get(kids[0]).x + pos.get(kids[kids.length - 1]).x) / 2;
-      pos.set(id, { x, y: depthOf.get(id) * DY });
+      pos.set(it, { x, y: items[it].depth * DY });
     }
     return visible;
   }
 
-  function ancestors(id) {
+  function ancestors(it) {
     const out = [];
-    for (let a = parentOf.get(id); a !== undefined; a = parentOf.get(a)) out.push(a);
+    for (let a = items[it].parent; a >= 0; a = items[a].parent) out.push(a);
     return out;
   }
 
@@ -141,46 +162,61 @@
     return s.length > n ? s.slice(0, n - 1) + "…" : s;
   }
 
-  function drawNode(n, p) {
-    const g = el("g", {
-      class: kindClasses(n).join(" "),
-      "data-node-id": n.id,
-      "data-kind": n.kind,
+  function drawNode(it, p) {
+    const item = items[it], n = nodeOf(it), m = item.move;
+    const attrs = {
+      class: kindClasses(it).join(" "),
+      "data-item": it,
+      "data-kind": kindOf(it),
       "data-worlds": n.worlds,
       tabindex: "0",
       role: "button",
-      "aria-label": `node ${n.id}: ${label(n)}, ${plural(n.worlds, "world")}`,
       transform: `translate(${p.x - W / 2},${p.y - H / 2})`,
-    }, gNodes);
-    el("title", {}, g, `#${n.id} ${label(n)}\ncost ${n.cost}, cost to go ${n.value}`);
-    if (COMM.has(n.kind)) el("rect", { class: "halo", x: -6, y: -6, width: W + 12, height: H + 12, rx: 9 }, g);
-    if (n.goal) el("rect", { class: "goal-ring", x: -4, y: -4, width: W + 8, height: H + 8, rx: 8 }, g);
-    const human = n.agent === HUMAN && n.kind !== "start";
+    };
+    if (item.ref) {
+      attrs["data-ref-id"] = n.id;
+      attrs["aria-label"] = `${label(it)}: leads to node ${n.id}, drawn at its first path`;
+    } else {
+      attrs["data-node-id"] = n.id;
+      attrs["aria-label"] = `node ${n.id}: ${label(it)}, ${plural(n.worlds, "world")}`;
+    }
+    const g = el("g", attrs, gNodes);
+    el("title", {}, g, item.ref
+      ? `${label(it)}\n→ node ${n.id}, shared by several paths: click to go to its first copy`
+      : `#${n.id} ${label(it)}\ncost ${m ? m.cost : 0}, cost to go ${n.value}`);
+    if (m && COMM.has(m.kind)) el("rect", { class: "halo", x: -6, y: -6, width: W + 12, height: H + 12, rx: 9 }, g);
+    if (n.goal && !item.ref) el("rect", { class: "goal-ring", x: -4, y: -4, width: W + 8, height: H + 8, rx: 8 }, g);
+    const human = m && m.agent === HUMAN;
     el("rect", { class: "box", x: 0, y: 0, width: W, height: H, rx: human ? H / 2 : 5 }, g);
     if (!n.copresent) el("rect", { class: "apart-bar", x: human ? 10 : 0, y: 0, width: 5, height: H }, g);
-    el("text", { x: W / 2, y: 16, "text-anchor": "middle" }, g, truncate(label(n), 24));
-    const sub = [plural(n.worlds, "world"), `K=${n.k}`];
-    if (!n.copresent) sub.push("apart");
-    if (n.goal) sub.push("goal");
-    el("text", { class: "sub", x: W / 2, y: 30, "text-anchor": "middle" }, g, sub.join(" · "));
-    if (n.worlds > 1) {
-      const b = el("g", { class: "badge", transform: `translate(${W - 2},2)` }, g);
-      el("circle", { r: 9 }, b);
-      el("text", { y: 3.5, "text-anchor": "middle" }, b, String(n.worlds));
+    el("text", { x: W / 2, y: 17, "text-anchor": "middle" }, g, truncate(label(it), 24));
+    let sub;
+    if (item.ref) {
+      sub = [`→ see node ${n.id}`];
+    } else {
+      sub = [plural(n.worlds, "world"), kText(n)];
+      if (!n.copresent) sub.push("apart");
+      if (n.goal) sub.push("goal");
     }
-    if (n.children.length) {
-      const folded = collapsed.has(n.id);
+    el("text", { class: "sub", x: W / 2, y: 33, "text-anchor": "middle" }, g, sub.join(" · "));
+    if (n.worlds > 1 && !item.ref) {
+      const b = el("g", { class: "badge", transform: `translate(${W - 2},2)` }, g);
+      el("circle", { r: 10 }, b);
+      el("text", { y: 4, "text-anchor": "middle" }, b, String(n.worlds));
+    }
+    if (item.kids.length) {
+      const folded = collapsed.has(it);
       const t = el("g", {
-        class: "toggle", "data-toggle-id": n.id, role: "button",
+        class: "toggle", "data-toggle-id": n.id, "data-toggle-item": it, role: "button",
         "aria-label": folded ? "expand" : "collapse",
-        transform: `translate(${p.x},${p.y + H / 2 + 7})`,
+        transform: `translate(${p.x},${p.y + H / 2 + 8})`,
       }, gNodes);
       // an invisible hit area: the circle alone is a few pixels wide when zoomed out
-      el("rect", { class: "hit", x: -9, y: -8, width: folded ? 70 : 18, height: 16 }, t);
-      el("circle", { r: 6.5 }, t);
+      el("rect", { class: "hit", x: -9, y: -8, width: folded ? 80 : 18, height: 16 }, t);
+      el("circle", { r: 7 }, t);
       el("text", { y: 4, "text-anchor": "middle" }, t, folded ? "+" : "−");
       if (folded) {
-        el("text", { class: "folded-count", x: 10, y: 4 }, t, `${sizeOf.get(n.id) - 1} more`);
+        el("text", { class: "folded-count", x: 11, y: 4 }, t, `${sizeOf[it] - 1} more`);
       }
     }
   }
@@ -191,10 +227,10 @@
       e.classList.remove("selected", "on-branch");
     }
     if (selected === null) return;
-    const g = gNodes.querySelector(`[data-node-id="${selected}"]`);
+    const g = gNodes.querySelector(`[data-item="${selected}"]`);
     if (g) g.classList.add("selected");
-    for (const id of [selected, ...ancestors(selected)]) {
-      const e = gEdges.querySelector(`[data-edge-to="${id}"]`);
+    for (const it of [selected, ...ancestors(selected)]) {
+      const e = gEdges.querySelector(`[data-edge-to="${it}"]`);
       if (e) e.classList.add("on-branch");
     }
   }
@@ -204,23 +240,25 @@
     visibleCount = visible.length;
     gEdges.textContent = "";
     gNodes.textContent = "";
-    for (const id of visible) {
-      if (collapsed.has(id)) continue;
-      const p = pos.get(id);
-      for (const c of byId.get(id).children) {
+    for (const it of visible) {
+      if (collapsed.has(it)) continue;
+      const p = pos.get(it);
+      for (const c of items[it].kids) {
         const q = pos.get(c);
         const y0 = p.y + H / 2, y1 = q.y - H / 2, ym = (y0 + y1) / 2;
         const cls = ["edge"];
-        if (byId.get(c).agent === HUMAN) cls.push("to-human");
+        if (items[c].move.agent === HUMAN) cls.push("to-human");
+        if (items[c].ref) cls.push("to-ref");
         el("path", {
           class: cls.join(" "), "data-edge-to": c,
           d: `M${p.x},${y0} C${p.x},${ym} ${q.x},${ym} ${q.x},${y1}`,
         }, gEdges);
       }
     }
-    for (const id of visible) drawNode(byId.get(id), pos.get(id));
+    for (const it of visible) drawNode(it, pos.get(it));
     markSelected();
-    $("node-count").textContent = `${visibleCount} of ${plural(nodes.length, "node")} shown`;
+    const shownNodes = visible.filter((it) => !items[it].ref).length;
+    $("node-count").textContent = `${shownNodes} of ${plural(nodes.length, "node")} shown`;
   }
 
   // ------------------------------------------------------------------ pan and zoom
@@ -237,6 +275,22 @@
     }
     const m = 30;
     vb = { x: x0 - W / 2 - m, y: y0 - H / 2 - m, w: x1 - x0 + W + 2 * m, h: y1 - y0 + H + 2 * m + 20 };
+    applyView();
+  }
+
+  function openView() {
+    // the whole tree when it reads at MIN_SCALE or more; else its top, around the root, at
+    // MIN_SCALE: a big policy opens readable, to be panned, not as an unreadable strip
+    fit();
+    const rw = svg.clientWidth || 1000, rh = svg.clientHeight || 600;
+    if (Math.min(rw / vb.w, rh / vb.h) >= MIN_SCALE) return;
+    const root = pos.get(0);
+    const w = rw / MIN_SCALE, hh = rh / MIN_SCALE;
+    // the root and, when it fits beside it, its first child (where the first branch goes)
+    const kid = items[0].kids.length && !collapsed.has(0) ? pos.get(items[0].kids[0]) : root;
+    const reach = w / 2 - W / 2 - 20;
+    const cx = Math.max((root.x + kid.x) / 2, root.x - reach);
+    vb = { x: cx - w / 2, y: root.y - H / 2 - 30, w, h: hh };
     applyView();
   }
 
@@ -332,37 +386,44 @@
       : `The human entertains ${plural(n.worlds, "world")}, all equal to the truth.`;
   }
 
-  function gotoButton(id, text) {
-    const n = byId.get(id);
-    const b = h("button", { type: "button", class: "goto" + (COMM.has(n.kind) ? " comm" : ""), "data-goto": id },
-      text || `#${id} ${label(n)}`);
+  function gotoButton(id, text, move) {
+    // a button to the node's first copy in the tree (data-goto: the node id)
+    const it = firstItem.get(id);
+    const m = move || items[it].move;
+    const b = h("button", { type: "button", class: "goto" + (m && COMM.has(m.kind) ? " comm" : ""), "data-goto": id },
+      text || `#${id} ${moveLabel(m)}`);
     return b;
   }
 
-  function showDetails(n) {
+  function showDetails(it) {
+    const n = nodeOf(it), m = items[it].move;
     $("details-empty").hidden = true;
     $("details-body").hidden = false;
     $("node-title").textContent = `Node ${n.id}${n.goal ? " — goal reached" : ""}`;
     const action = $("fact-action");
-    action.textContent = n.action;
-    action.className = COMM.has(n.kind) ? "comm-text" : "";
-    if (COMM.has(n.kind)) action.textContent += ` (communication: ${n.kind})`;
-    $("fact-agent").textContent = n.agent ? `${n.agent} (${role(n.agent)})` : "nobody (initial state)";
-    $("fact-cost").textContent = String(n.cost);
+    action.textContent = m ? m.action : "start";
+    action.className = m && COMM.has(m.kind) ? "comm-text" : "";
+    if (m && COMM.has(m.kind)) action.textContent += ` (communication: ${m.kind})`;
+    $("fact-agent").textContent = m ? `${m.agent} (${role(m.agent)})` : "nobody (initial state)";
+    $("fact-cost").textContent = String(m ? m.cost : 0);
     $("fact-value").textContent = String(n.value);
     const co = $("fact-copresent");
     co.textContent = n.copresent ? "together" : "apart (the human does not see the robot's actions)";
     co.className = n.copresent ? "" : "apart-text";
-    $("fact-k").textContent = `${n.k} (bound K = ${policy.K})`;
+    $("fact-k").textContent = `${n.k} of K = ${policy.K} robot turns unseen by the human`;
     $("fact-worlds").textContent = String(n.worlds);
     $("fact-to-move").textContent = n.to_move || "nobody (goal reached)";
     const nav = $("node-nav");
     nav.textContent = "";
-    const up = parentOf.get(n.id);
-    if (up !== undefined) nav.append("up: ", gotoButton(up), h("br"));
-    if (n.children.length) {
+    const ups = parentsOf.get(n.id) || [];
+    if (ups.length) {
+      nav.append(ups.length > 1 ? `from (${ups.length} nodes lead here): ` : "from: ");
+      for (const u of ups) nav.append(gotoButton(u));
+      nav.append(h("br"));
+    }
+    if (n.moves.length) {
       nav.append("next: ");
-      for (const c of n.children) nav.append(gotoButton(c));
+      for (const c of n.moves) nav.append(gotoButton(c.to, `#${c.to} ${moveLabel(c)}`, c));
     }
     worldTable(n);
     const doubted = new Set(n.divergence);
@@ -379,41 +440,47 @@
 
   // ------------------------------------------------------------------ timeline
 
-  function branchThrough(id) {
-    const path = [...ancestors(id).reverse(), id];
-    for (let n = byId.get(id); n.children.length;) {
-      n = byId.get(n.children[0]);
-      path.push(n.id);
+  function branchThrough(it) {
+    // the items from the root to ``it``, then on along first choices to a leaf (through a
+    // reference, on from the node's first copy)
+    const path = [...ancestors(it).reverse(), it];
+    for (let cur = it; ;) {
+      const from = items[cur].ref ? firstItem.get(items[cur].node) : cur;
+      const kids = items[from].kids;
+      if (!kids.length) break;
+      cur = kids[0];
+      path.push(cur);
     }
     return path;
   }
 
-  function showTimeline(id) {
-    const path = branchThrough(id).map((i) => byId.get(i));
-    const upto = path.findIndex((n) => n.id === id);
-    const leaf = path[path.length - 1];
+  function showTimeline(it) {
+    const path = branchThrough(it);
+    const upto = path.indexOf(it);
+    const leaf = nodeOf(path[path.length - 1]);
     const box = $("timeline");
     box.textContent = "";
     box.append(h("div", { class: "lane-head" }, `${ROBOT} (robot)`),
       h("div", { class: "lane-head" }, `${HUMAN} (human)`));
-    const step = (n, i) => {
-      const cls = ["tl-step", role(n.agent)];
-      if (COMM.has(n.kind)) cls.push("comm");
-      if (IDLE.has(n.kind)) cls.push("idle");
-      if (n.id === id) cls.push("current");
+    const step = (i) => {
+      const m = items[path[i]].move, n = nodeOf(path[i]);
+      const cls = ["tl-step", role(m.agent)];
+      if (COMM.has(m.kind)) cls.push("comm");
+      if (IDLE.has(m.kind)) cls.push("idle");
+      if (i === upto) cls.push("current");
       if (i > upto) cls.push("after");
-      const d = h("div", { class: cls.join(" "), "data-step-node": n.id, "data-agent": n.agent });
-      d.append(h("span", { class: "n" }, `#${n.id}`), n.action);
+      const d = h("div", { class: cls.join(" "), "data-step-node": n.id, "data-step-item": path[i], "data-agent": m.agent });
+      d.append(h("span", { class: "n" }, `#${n.id}`), m.action);
       return d;
     };
-    // same rule as policy.timeline(): a step taken while apart goes to its agent's lane
+    // same rule as policy_format.timeline(): a step taken while apart goes to its agent's lane
     let lanes = null;
     let cost = 0;
     for (let i = 1; i < path.length; i++) {
-      const n = path[i], prev = path[i - 1];
-      cost += Number(n.cost) || 0;
+      const m = items[path[i]].move, n = nodeOf(path[i]), prev = nodeOf(path[i - 1]);
+      cost += Number(m.cost) || 0;
       if (prev.copresent) {
-        box.appendChild(step(n, i));
+        box.appendChild(step(i));
       } else {
         if (!lanes) {
           const par = h("div", { class: "tl-parallel" });
@@ -423,44 +490,46 @@
           lanes[HUMAN] = par.appendChild(h("div", { class: "tl-lane", "data-agent": HUMAN }));
           box.appendChild(par);
         }
-        lanes[n.agent].appendChild(step(n, i));
+        lanes[m.agent].appendChild(step(i));
       }
       if (n.copresent) lanes = null;
     }
-    if (leaf.goal) box.appendChild(h("div", { class: "tl-end" }, `goal reached (branch cost ${cost})`));
+    if (path.length === 1) box.appendChild(h("div", { class: "tl-end" }, "the initial state is the goal"));
+    else if (leaf.goal) box.appendChild(h("div", { class: "tl-end" }, `goal reached (branch cost ${cost})`));
     $("branch-select").value = String(leaf.id);
     $("timeline-note").textContent = upto < path.length - 1
-      ? `Branch through node ${id}, continued along first choices to leaf ${leaf.id} (faded).`
+      ? `Branch through node ${nodeOf(it).id}, continued along first choices to leaf ${leaf.id} (faded).`
       : `Branch ending at leaf ${leaf.id}.`;
   }
 
   // ------------------------------------------------------------------ selection
 
-  function select(id, recenter) {
-    if (!byId.has(id)) return;
+  function select(it, recenter, quiet) {
+    if (it === undefined || it === null || !items[it]) return;
+    if (items[it].ref) it = firstItem.get(items[it].node); // a reference leads to the first copy
     let unfolded = false;
-    for (const a of ancestors(id)) unfolded = collapsed.delete(a) || unfolded;
-    selected = id;
+    for (const a of ancestors(it)) unfolded = collapsed.delete(a) || unfolded;
+    selected = it;
     if (unfolded) draw();
     else markSelected();
-    if (unfolded || recenter) centerOn(id);
-    const n = byId.get(id);
-    showDetails(n);
-    showTimeline(id);
+    if (unfolded || recenter) centerOn(it);
+    showDetails(it);
+    showTimeline(it);
+    if (quiet) return;
     try {
-      history.replaceState(null, "", `#node=${id}`);
+      history.replaceState(null, "", `#node=${items[it].node}`);
     } catch (err) {
       // some browsers refuse history changes on file pages; the selection still works
     }
   }
 
-  function toggle(id) {
+  function toggle(it) {
     // keep the toggled node where it was on screen; the layout around it changes
-    const before = pos.get(id);
-    if (collapsed.has(id)) collapsed.delete(id);
-    else collapsed.add(id);
+    const before = pos.get(it);
+    if (collapsed.has(it)) collapsed.delete(it);
+    else collapsed.add(it);
     draw();
-    const after = pos.get(id);
+    const after = pos.get(it);
     vb.x += after.x - before.x;
     vb.y += after.y - before.y;
     applyView();
@@ -472,26 +541,26 @@
       return;
     }
     const t = e.target.closest(".toggle");
-    if (t) return toggle(Number(t.getAttribute("data-toggle-id")));
+    if (t) return toggle(Number(t.getAttribute("data-toggle-item")));
     const g = e.target.closest(".node");
-    if (g) select(Number(g.getAttribute("data-node-id")), false);
+    if (g) select(Number(g.getAttribute("data-item")), items[Number(g.getAttribute("data-item"))].ref);
   });
   svg.addEventListener("keydown", (e) => {
     const g = e.target.closest && e.target.closest(".node");
     if (!g) return;
-    const id = Number(g.getAttribute("data-node-id"));
+    const it = Number(g.getAttribute("data-item"));
     if (e.key === "Enter" || e.key === " ") {
       e.preventDefault();
-      select(id, false);
-    } else if ((e.key === "+" || e.key === "-") && byId.get(id).children.length) {
-      toggle(id);
+      select(it, items[it].ref);
+    } else if ((e.key === "+" || e.key === "-") && items[it].kids.length) {
+      toggle(it);
     }
   });
   document.addEventListener("click", (e) => {
-    const b = e.target.closest && e.target.closest("[data-goto], [data-step-node]");
+    const b = e.target.closest && e.target.closest("[data-goto], [data-step-item]");
     if (!b) return;
-    const id = b.getAttribute("data-goto") ?? b.getAttribute("data-step-node");
-    select(Number(id), true);
+    if (b.hasAttribute("data-step-item")) select(Number(b.getAttribute("data-step-item")), true);
+    else select(firstItem.get(Number(b.getAttribute("data-goto"))), true);
   });
 
   $("zoom-in").addEventListener("click", () => zoom(1 / 1.25));
@@ -503,37 +572,50 @@
     fit();
   });
   $("collapse-all").addEventListener("click", () => {
-    for (const n of nodes) if (n.children.length && depthOf.get(n.id) >= 1) collapsed.add(n.id);
+    for (let it = 0; it < items.length; it++) if (items[it].kids.length && items[it].depth >= 1) collapsed.add(it);
     draw();
     fit();
   });
   $("show-timeline").addEventListener("click", () => $("timeline-pane").scrollIntoView());
-  $("branch-select").addEventListener("change", (e) => select(Number(e.target.value), true));
+  $("branch-select").addEventListener("change", (e) => select(firstItem.get(Number(e.target.value)), true));
 
   // ------------------------------------------------------------------ start
 
+  const moveCount = nodes.reduce((a, n) => a + n.moves.length, 0);
   $("policy-title").textContent = `${policy.problem} — ${policy.domain}`;
   $("policy-facts").textContent = [
-    `worst-case cost ${policy.cost}`, `${policy.leaves} branch${policy.leaves === 1 ? "" : "es"}`,
+    `${policy.objective && policy.objective.kind === "expected" ? "expected" : "worst-case"} cost ${policy.cost}`,
+    `${policy.leaves} branch${policy.leaves === 1 ? "" : "es"}`,
     plural(policy.communications, "communication"), `K = ${policy.K}`,
-    plural(nodes.length, "node"), `robot ${ROBOT}, human ${HUMAN}`,
+    `${plural(nodes.length, "node")} and ${plural(moveCount, "move")}`, `robot ${ROBOT}, human ${HUMAN}`,
     policy.optimal === false ? "not proved optimal" : "optimal",
   ].join(" · ");
-  const comms = preorder.filter((i) => COMM.has(byId.get(i).kind));
+  // every communication move of the graph, once, leading to the node it reaches
   const list = $("comm-list");
-  if (comms.length) for (const i of comms) list.appendChild(gotoButton(i));
-  else list.textContent = "none";
+  let comms = 0;
+  for (const n of nodes) {
+    for (const m of n.moves) {
+      if (!COMM.has(m.kind)) continue;
+      list.appendChild(gotoButton(m.to, `#${m.to} ${moveLabel(m)}`, m));
+      comms++;
+    }
+  }
+  if (!comms) list.textContent = "none";
+  // distinct leaves, in id order; a leaf is shown on the branch to its first copy
   const select_ = $("branch-select");
-  for (const i of preorder) {
-    const n = byId.get(i);
-    if (n.children.length) continue;
-    select_.appendChild(h("option", { value: i }, `leaf #${i}: ${label(n)}`));
+  const MAX_OPTIONS = 2000;
+  let options = 0;
+  for (const n of nodes) {
+    if (n.moves.length || options >= MAX_OPTIONS) continue;
+    select_.appendChild(h("option", { value: n.id }, `leaf #${n.id}: ${label(firstItem.get(n.id))}`));
+    options++;
   }
 
   initialFolding();
   draw();
-  fit();
+  openView();
   const m = /node=(\d+)/.exec(location.hash);
-  if (m) select(Number(m[1]), true);
+  if (m && firstItem.has(Number(m[1]))) select(firstItem.get(Number(m[1])), true);
+  else select(0, false, true); // the root's details and its first branch, the URL untouched
   document.body.setAttribute("data-ready", "true");
 })();
