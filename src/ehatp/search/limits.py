@@ -155,7 +155,11 @@ class Budget:
     def memory_reached(self) -> LimitReached:
         assert self.max_memory is not None
         return LimitReached(MEMORY, f"memory limit of {format_size(self.max_memory)} reached "
-                                    f"(resident {format_size(self.rss)}), during {self.phase}")
+                                    f"(resident {format_size(self.rss)}, and what follows "
+                                    f"needs more), during {self.phase}"
+                            if self.rss <= self.max_memory else
+                            f"memory limit of {format_size(self.max_memory)} reached "
+                            f"(resident {format_size(self.rss)}), during {self.phase}")
 
     def out_of_memory(self) -> LimitReached:
         """A :class:`MemoryError` caught: the system refused memory before the limit."""

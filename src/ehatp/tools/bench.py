@@ -212,3 +212,161 @@ def rich_table(rows: Sequence[dict[str, Any]]) -> Table:
 
 __all__ = ["REQUIRED_KEYS", "TABLE1", "PaperRow", "format_table", "headline", "instance_key",
            "rich_table", "run_instance", "run_table1", "totals"]
+
+
+# --- scaling ---------------------------------------------------------------------------------
+#
+# A grid of generated problems, each solved in a child process of its own so that peak memory
+# (the child's maximum resident set size) never accumulates from one instance to the next. The
+# child uses only ehatp's public API (load, solve, Policy.to_json), so the same grid can time
+# another checkout of the code (``benchmarks/scaling.py --src DIR``).
+
+# a cube trip of K robot turns apart: (turn_before_move, waypoints); K=4 is the paper's
+CUBE_TRIPS: dict[int, tuple[bool, int]] = {2: (False, 0), 4: (True, 0), 6: (False, 2),
+                                           8: (True, 1)}
+# a cooking trip: (variant, waypoints); variant 3 turns before each move
+COOKING_TRIPS: dict[int, tuple[int, int]] = {2: (1, 0), 4: (3, 0), 6: (1, 2), 8: (3, 1)}
+
+
+@dataclass(frozen=True)
+class GridPoint:
+    """One generated instance. ``size`` orders the grid and is what ``--max-size`` bounds: the
+    number of cubes, or for cooking the number of places on the pantry trip."""
+
+    family: str  # "cubes" | "cooking"
+    K: int
+    cubes: int = 0
+    boxes: int = 0
+    transparent: bool = False
+    reach: str = "fetched"
+
+    @property
+    def name(self) -> str:
+        if self.family == "cooking":
+            return f"cooking-k{self.K}"
+        look = "transparent" if self.transparent else "opaque"
+        any_ = "-any" if self.reach == "any" else ""
+        return f"cubes-c{self.cubes}-b{self.boxes}-{look}-k{self.K}{any_}"
+
+    @property
+    def size(self) -> int:
+        if self.family == "cooking":
+            return 2 + COOKING_TRIPS[self.K][1]
+        return self.cubes
+
+    def toml(self) -> str:
+        """The problem file of this point."""
+        if self.family == "cooking":
+            variant, ways = COOKING_TRIPS[self.K]
+            extra = f"waypoints = {ways}\n" if ways else ""
+            return (f'[problem]\nname = "{self.name}"\nstarts = "human"\nK = {self.K}\n\n'
+                    f'[domain]\nname = "cooking"\nvariant = {variant}\n{extra}\n'
+                    '[init]\ntrue = ["at(R, kitchen)", "facing(R, kitchen)", '
+                    '"at(H, kitchen)", "facing(H, kitchen)", "in_pantry"]\n\n'
+                    '[agenda]\nrobot = ["prepare"]\nhuman = ["prepare"]\n')
+        turn, ways = CUBE_TRIPS[self.K]
+        cubes = [f"c{i}" for i in range(1, self.cubes + 1)]
+        on_mt = cubes[:(self.cubes + 1) // 2]  # the larger half on mt (the robot's)
+        boxes = [f"box{i}" for i in range(1, self.boxes + 1)]
+        true = ["at(R, mt)", "facing(R, mt)", "at(H, mt)", "facing(H, mt)", "handempty(R)",
+                "handempty(H)", *(f"empty({b})" for b in boxes)]
+        if self.transparent:
+            true += [f"transparent({b})" for b in boxes]
+        for c in cubes:
+            t = "mt" if c in on_mt else "ot"
+            true += [f"on({c}, {t})", f"origin({c}, {t})"]
+        opts = f"turn_before_move = {'true' if turn else 'false'}\n"
+        opts += f'human_reach = "{self.reach}"\n'
+        opts += f"waypoints = {ways}\n" if ways else ""
+        return (f'[problem]\nname = "{self.name}"\nstarts = "human"\nK = {self.K}\n\n'
+                f'[domain]\nname = "cubes"\n{opts}\n'
+                f"[objects]\ncube = {_toml_list(cubes)}\nbox = {_toml_list(boxes)}\n\n"
+                f"[init]\ntrue = {_toml_list(true)}\n\n"
+                '[agenda]\nrobot = ["organize"]\nhuman = ["organize"]\n')
+
+
+def _toml_list(xs: Sequence[str]) -> str:
+    return "[" + ", ".join(f'"{x}"' for x in xs) + "]"
+
+
+def scaling_grid() -> list[GridPoint]:
+    """The grid, smallest first: cubes 3-10 split over both tables, 2-3 boxes, transparent
+    and opaque, trips of K=2-8; cooking with trips of K=2-8; then three larger instances,
+    run only when named with ``--only`` or allowed by ``--max-size``."""
+    pts = [GridPoint("cubes", k, n, b, tr) for n in range(3, 11) for b in (2, 3)
+           for tr in (True, False) for k in sorted(CUBE_TRIPS)]
+    pts += [GridPoint("cooking", k) for k in sorted(COOKING_TRIPS)]
+    pts += [GridPoint("cubes", 2, 12, 2), GridPoint("cubes", 2, 10, 2, reach="any")]
+    return sorted(pts, key=lambda p: (p.size, p.family, p.reach, p.boxes, p.K,
+                                      not p.transparent))
+
+
+# The child: load, solve (timed), serialise the policy (timed), report one JSON line. Public
+# API only, and ``max_memory`` only when this checkout's solve() takes it.
+_CHILD = r"""
+import inspect, json, resource, sys, time
+t_start = time.perf_counter()
+import ehatp
+path, timeout, max_memory = sys.argv[1], float(sys.argv[2]), int(sys.argv[3])
+problem = ehatp.load(path)
+kw = {"timeout": timeout}
+if max_memory and "max_memory" in inspect.signature(ehatp.solve).parameters:
+    kw["max_memory"] = max_memory
+t0 = time.perf_counter()
+result = ehatp.solve(problem, **kw)
+text = result.policy.to_json() if result.policy is not None else None
+t1 = time.perf_counter()
+st = result.stats
+pol = result.policy
+print(json.dumps({
+    "status": result.status, "optimal": result.optimal, "time_s": t1 - t0,
+    "process_s": t1 - t_start, "search_ms": st.get("time_ms"),
+    "generated": st.get("generated"), "distinct": st.get("distinct"),
+    "max_worlds": st.get("max_worlds"),
+    "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+    "policy_nodes": None if pol is None else len(pol.nodes),
+    "policy_bytes": None if text is None else len(text.encode()),
+    "cost": None if pol is None else (float(pol.cost) if pol.cost is not None else None),
+    "reason": result.reason}))
+"""
+
+
+def run_point(point: GridPoint, *, timeout: float, max_memory: int = 0,
+              src: str | None = None, workdir: str | None = None) -> dict[str, Any]:
+    """Solve ``point`` in a fresh Python process (``src``: the ``src`` directory of another
+    checkout to time instead of this one). The child stops itself at ``timeout`` seconds; it is
+    killed if it has not finished 5 % (+ 10 s of start-up) later."""
+    import json
+    import os
+    import subprocess
+    import sys
+    import tempfile
+
+    row: dict[str, Any] = {"instance": point.name, "size": point.size, "K": point.K,
+                           "cubes": point.cubes, "boxes": point.boxes,
+                           "transparent": point.transparent, "reach": point.reach}
+    env = dict(os.environ)
+    if src is not None:
+        env["PYTHONPATH"] = src + os.pathsep + env.get("PYTHONPATH", "")
+    with tempfile.TemporaryDirectory(dir=workdir) as tmp:
+        path = os.path.join(tmp, f"{point.name}.toml")
+        with open(path, "w", encoding="utf-8") as f:
+            f.write(point.toml())
+        cmd = [sys.executable, "-c", _CHILD, path, str(timeout), str(max_memory)]
+        try:
+            proc = subprocess.run(cmd, capture_output=True, text=True, env=env,
+                                  timeout=timeout * 1.05 + 10)
+        except subprocess.TimeoutExpired:
+            row.update(status="killed", error=f"did not stop within {timeout * 1.05 + 10:.0f} s")
+            return row
+    lines = proc.stdout.strip().splitlines()
+    if proc.returncode != 0 or not lines:
+        err = (proc.stderr.strip().splitlines() or [f"exit {proc.returncode}"])[-1]
+        row.update(status="crashed", error=err)
+        return row
+    data = json.loads(lines[-1])
+    row.update(data)
+    t = data["time_s"]
+    row["states_per_s"] = round(data["generated"] / t) if t and data["generated"] else None
+    row["error"] = None if data["status"] == "solved" else data["reason"]
+    return row

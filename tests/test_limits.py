@@ -1,0 +1,171 @@
+"""Limits that hold (docs/semantics.md §7, "Search"): a time or memory limit stops the whole
+solve cleanly, whatever phase is under way, with partial statistics, and the best policy so
+far when the root was solved. Bounds here are generous on purpose: no timing is measured."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+import ehatp
+from ehatp.model.problem import parse_size
+from ehatp.search import andor, values
+from ehatp.search.limits import Budget, LimitReached
+from ehatp.tools.bench import GridPoint
+
+CUBES = Path(__file__).resolve().parents[1] / "examples" / "cubes"
+# about 200k distinct states and a few seconds of search: far more than the limits below allow
+BIG = GridPoint("cubes", 8, cubes=6, boxes=3, transparent=False)
+
+
+def big_problem(tmp_path: Path) -> Path:
+    path = tmp_path / f"{BIG.name}.toml"
+    path.write_text(BIG.toml(), encoding="utf-8")
+    return path
+
+
+def test_timeout_stops_the_search_of_a_big_problem(tmp_path: Path) -> None:
+    p = ehatp.load(big_problem(tmp_path))
+    t0 = time.perf_counter()
+    r = ehatp.solve(p, timeout=0.5)
+    assert time.perf_counter() - t0 < 0.5 + 5
+    assert r.status == "timeout" and not r.optimal
+    assert "time limit of 0.5 s" in r.reason
+    assert r.stats["distinct"] > 1 and r.stats["expanded"] > 0
+
+
+def test_timeout_stops_the_value_pass(monkeypatch: pytest.MonkeyPatch) -> None:
+    # a slow backward pass: every node is checked, and each costs a twentieth of a second
+    def slow_speaks(m: object) -> bool:
+        time.sleep(0.05)
+        return False
+
+    monkeypatch.setattr(values, "speaks", slow_speaks)
+    monkeypatch.setattr(values, "CHECK_EVERY", 0)
+    t0 = time.perf_counter()
+    r = ehatp.solve(ehatp.load(CUBES / "p6.toml"), timeout=1.0)
+    assert time.perf_counter() - t0 < 1.0 + 5
+    assert r.status == "timeout" and r.policy is None and not r.optimal
+    assert "during values" in r.reason
+    assert r.stats["distinct"] > 1
+
+
+def test_timeout_stops_extraction(monkeypatch: pytest.MonkeyPatch) -> None:
+    from ehatp.search import planner
+
+    def slow_extract(*args: object, **kwargs: object) -> None:
+        time.sleep(2)
+        raise AssertionError("extraction should have been stopped before it began")
+
+    monkeypatch.setattr(planner, "extract", slow_extract)
+    # the search and the values fit in the time; extraction starts past it
+    real = planner.search
+
+    def search_then_wait(*args: object, **kwargs: object) -> andor.SearchOutcome:
+        out = real(*args, **kwargs)  # type: ignore[arg-type]
+        time.sleep(0.8)
+        return out
+
+    monkeypatch.setattr(planner, "search", search_then_wait)
+    r = ehatp.solve(ehatp.load(CUBES / "p1.toml"), timeout=0.2)
+    assert r.status == "timeout" and r.policy is None
+    assert "during extraction" in r.reason
+
+
+def test_a_stop_after_the_root_is_solved_keeps_the_best_policy(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # a time limit striking as soon as the root is solved, before optimality is proven
+    def stop_once_solved(self: Budget, states: int, solved: bool) -> LimitReached | None:
+        return self.timeout_reached() if solved else None
+
+    p = ehatp.load(CUBES / "p4.toml")
+    best = ehatp.solve(p)
+    monkeypatch.setattr(Budget, "search_should_stop", stop_once_solved)
+    r = ehatp.solve(p, timeout=1000)
+    assert r.status == "timeout" and not r.optimal
+    assert r.policy is not None and not r.policy.optimal
+    assert ehatp.validate(p, r.policy).ok
+    assert best.optimal and best.policy is not None and r.policy.cost >= best.policy.cost
+
+
+def test_memory_error_is_a_clean_stop(monkeypatch: pytest.MonkeyPatch) -> None:
+    real = andor._expand
+    calls = 0
+
+    def failing(*args: object) -> None:
+        nonlocal calls
+        calls += 1
+        if calls > 30:
+            raise MemoryError
+        real(*args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(andor, "_expand", failing)
+    r = ehatp.solve(ehatp.load(CUBES / "p6.toml"))
+    assert r.status == "memory-limit" and r.policy is None and not r.optimal
+    assert "out of memory" in r.reason
+    assert r.stats["expanded"] == 30
+
+
+def test_memory_limit_below_the_start_stops_at_once() -> None:
+    r = ehatp.solve(ehatp.load(CUBES / "p1.toml"), max_memory=1)
+    assert r.status == "memory-limit" and r.policy is None
+    assert "memory limit of" in r.reason
+
+
+def _cli(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    src = str(Path(__file__).resolve().parents[1] / "src")
+    env = {**os.environ, "PYTHONPATH": src + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    return subprocess.run([sys.executable, "-m", "ehatp.tools.cli", *args], cwd=cwd, env=env,
+                          capture_output=True, text=True, timeout=120)
+
+
+def test_cli_max_memory_stops_cleanly_with_partial_statistics(tmp_path: Path) -> None:
+    # a fresh process: its resident size starts small and only the search makes it grow
+    r = _cli("solve", str(big_problem(tmp_path)), "--max-memory", "80M", cwd=tmp_path)
+    assert r.returncode == 1, r.stderr
+    first = r.stdout.splitlines()[0]
+    assert "stopped early" in first and "memory limit of 80 MB" in first
+    assert "states" in r.stdout and "generated" in r.stdout
+    assert "Traceback" not in r.stderr
+
+
+def test_cli_timeout_bounds_the_whole_command(tmp_path: Path) -> None:
+    t0 = time.perf_counter()
+    r = _cli("solve", str(big_problem(tmp_path)), "--timeout", "1", cwd=tmp_path)
+    assert time.perf_counter() - t0 < 1 + 10  # start-up included, generously
+    assert r.returncode == 1, r.stderr
+    assert "time limit of 1 s" in r.stdout.splitlines()[0]
+
+
+def test_cli_bad_memory_size_is_one_line(tmp_path: Path) -> None:
+    r = _cli("solve", str(CUBES / "p1.toml"), "--max-memory", "lots", cwd=tmp_path)
+    assert r.returncode == 2
+    assert r.stderr.strip().count("\n") == 0 and "--max-memory lots" in r.stderr
+
+
+@pytest.mark.parametrize(("text", "n"), [("2G", 2 << 30), ("512M", 512 << 20),
+                                         ("1.5GB", 3 << 29), ("800k", 800 << 10),
+                                         ("1GiB", 1 << 30), (4096, 4096)])
+def test_sizes(text: str | int, n: int) -> None:
+    assert parse_size(text) == n
+
+
+@pytest.mark.parametrize("text", ["", "lots", "-1G", "0", 0, True, "1X"])
+def test_bad_sizes(text: str | int) -> None:
+    with pytest.raises(ValueError):
+        parse_size(text)
+
+
+def test_toml_max_memory(tmp_path: Path) -> None:
+    text = (CUBES / "p1.toml").read_text(encoding="utf-8")
+    f = tmp_path / "p.toml"
+    f.write_text(text + '\n[limits]\nmax_memory = "1G"\n', encoding="utf-8")
+    assert ehatp.load(f).limits.max_memory == 1 << 30
+    f.write_text(text + '\n[limits]\nmax_memory = "plenty"\n', encoding="utf-8")
+    with pytest.raises(ehatp.InputError, match="max_memory"):
+        ehatp.load(f)
