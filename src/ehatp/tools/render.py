@@ -253,7 +253,8 @@ def to_dot(policy: Policy, view: View | None = None) -> graphviz.Digraph:
     """The policy (or the part ``view`` keeps) as a Graphviz digraph: one node per policy node,
     one edge per move."""
     view = view or plan_view(policy, max_nodes=None, share=False)
-    title = (f"{policy.problem} ({policy.domain}): worst-case cost {policy.cost}, "
+    kind = "expected" if policy.objective.get("kind") == "expected" else "worst-case"
+    title = (f"{policy.problem} ({policy.domain}): {kind} cost {policy.cost}, "
              f"{policy.leaves} branches, {policy.communications} communication(s); "
              f"{len(policy.nodes)} nodes")
     label = "\\l".join(_dot_text(x) for x in [title, *(f"collapsed: {t}" for t in view.notes)])
