@@ -304,7 +304,8 @@ def show_cmd(
     tree: Annotated[bool, typer.Option(
         "--tree/--no-tree", help="Print the policy tree.")] = True,
     timelines: Annotated[bool, typer.Option(
-        "--timelines/--no-timelines", help="Print each branch's timeline.")] = True,
+        "--timelines/--no-timelines",
+        help="Print the branches' timelines (the first 100).")] = True,
     details: Annotated[bool, typer.Option(
         "--details", "-d", help="Under each tree node, list what the human is unsure about "
                                 "and the K-counter.")] = False,
@@ -312,11 +313,13 @@ def show_cmd(
         "--problem", "-p", help="Check that the policy was planned for this problem file.",
         metavar="PROBLEM.toml", show_default=False)] = None,
 ) -> None:
-    """Print a policy as an indented tree and as one timeline per branch.
+    """Print a policy as an indented tree and the timelines of its branches (the first 100).
 
     Tree: each line is one step (node number, agent, action, W = worlds the human entertains;
     marks apart, COMM for a communication, GOAL). Straight runs stay at one indent; the tree
-    forks only where the human chooses. Timelines: turns while the agents are together,
+    forks only where the human chooses. A node reached by several paths is printed once; the
+    other moves into it end with "-> see node N".
+    Timelines: turns while the agents are together,
     parallel lanes while they are apart. Colour on a terminal, plain text in a pipe.
     The file's structure is checked first (exit 2 if it was edited into something else).
     """
