@@ -337,7 +337,7 @@ class Policy:
             raise InputError(name, "", f"not an ehatp policy (missing field {e})",
                              POLICY_FIX) from None
         except (TypeError, AttributeError) as e:
-            place, what = _malformed(raw) or ("", f"malformed policy node ({e})")
+            place, what = malformed(raw) or ("", f"malformed policy node ({e})")
             raise InputError(name, place, what, POLICY_FIX) from None
         policy._check_graph(name)
         return policy
@@ -400,9 +400,10 @@ def topological_order(nodes: list[PolicyNode]) -> list[int]:
     return post
 
 
-def _malformed(raw: dict[str, Any]) -> tuple[str, str] | None:
-    """Where a policy's JSON has the wrong shape for the reader, in the file's own terms."""
-    nodes = raw.get("nodes")
+def malformed(raw: Any) -> tuple[str, str] | None:
+    """Where a policy's JSON has the wrong shape for the reader, in the file's own terms
+    (``(place, what)``), or None."""
+    nodes = raw.get("nodes") if isinstance(raw, dict) else None
     if not isinstance(nodes, list):
         return "nodes", "nodes must be a list of node objects"
     for i, n in enumerate(nodes):
@@ -487,6 +488,6 @@ def timeline(policy: Policy, branch: Branch) -> dict[str, Any]:
     return {"leaf": branch[-1].id, "steps": steps}
 
 
-__all__ = ["COMM_KINDS", "FORMAT", "POLICY_FIX", "READS", "VERSION", "Branch", "Cost",
+__all__ = ["COMM_KINDS", "FORMAT", "POLICY_FIX", "READS", "VERSION", "Branch", "Cost", "malformed",
            "PathStep", "Policy", "PolicyMove", "PolicyNode", "num", "timeline",
            "topological_order"]

@@ -29,7 +29,7 @@ from .. import __version__
 from ..errors import EhatpError, InputError
 from ..model.domain import DomainError
 from ..model.problem import Problem
-from ..policy_format import POLICY_FIX, Policy
+from ..policy_format import POLICY_FIX, Policy, malformed
 
 EXIT_OK, EXIT_NO_POLICY, EXIT_BAD_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
 ARGV_KEY = "ehatp.argv"  # where the command line is kept for an internal-error report
@@ -79,19 +79,7 @@ def _shape(path: Path | str) -> tuple[str, str] | None:
         raw = json.loads(Path(path).read_text(encoding="utf-8"))
     except (OSError, ValueError, RecursionError):
         return None
-    nodes = raw.get("nodes") if isinstance(raw, dict) else None
-    if not isinstance(nodes, list):
-        return "nodes", "nodes must be a list of node objects"
-    for i, n in enumerate(nodes):
-        if not isinstance(n, dict):
-            return f"nodes[{i}]", f"a node must be an object, got {n!r:.40}"
-        moves = n.get("moves", [])
-        if not isinstance(moves, list):
-            return f"nodes[{i}].moves", "moves must be a list of move objects"
-        for j, m in enumerate(moves):
-            if not isinstance(m, dict):
-                return f"nodes[{i}].moves[{j}]", f"a move must be an object, got {m!r:.40}"
-    return None
+    return malformed(raw)
 
 
 _NODE_FIELDS: dict[str, tuple[str, str]] = {
