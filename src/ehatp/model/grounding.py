@@ -157,6 +157,7 @@ class _Grounder:
         self.display: dict[Formula, str] = {}
         self.task_names: list[str] = []
         self.task_index: dict[str, int] = {}
+        self._derived: dict[tuple[str, tuple[str, ...]], Formula] = {}
 
     # -- atoms --
     def run(self) -> Grounded:
@@ -254,8 +255,13 @@ class _Grounder:
             if a not in self.obj_type:
                 raise DomainError(f"{pred}({', '.join(args)}): unknown object {a!r}")
         dv = self.d.derived_predicates.get(pred)
-        if dv is not None:
-            return self.ground_f(dv.body, dict(zip(dv.params, args, strict=True)))
+        if dv is not None:  # grounded once per arguments (can_put(c, b) is in many formulas)
+            key = (pred, args)
+            g = self._derived.get(key)
+            if g is None:
+                g = self._derived[key] = self.ground_f(dv.body,
+                                                       dict(zip(dv.params, args, strict=True)))
+            return g
         if pred not in self.d.predicates:
             raise DomainError(f"unknown predicate {pred!r}")
         name = call_str(pred, args)
@@ -271,10 +277,21 @@ class _Grounder:
 
     def shown(self, f: Formula, binding: Mapping[Var, str]) -> Formula:
         """Ground ``f`` and remember how each conjunct reads in the domain's vocabulary."""
-        g = self.ground_f(f, binding)
-        self.display.setdefault(g, str(substitute(f, binding)))
-        for part in f.args if isinstance(f, And) else ():
-            self.display.setdefault(self.ground_f(part, binding), str(substitute(part, binding)))
+        display = self.display
+        if not isinstance(f, And):
+            g = self.ground_f(f, binding)
+            if g not in display:
+                display[g] = str(substitute(f, binding))
+            return g
+        # each conjunct grounded once: the conjunction is their simplified And (as ground()
+        # makes it), and each keeps its own reading too
+        parts = [(part, self.ground_f(part, binding)) for part in f.args]
+        g = simplify_and([gp for _, gp in parts])
+        if g not in display:
+            display[g] = str(substitute(f, binding))
+        for part, gp in parts:
+            if gp not in display:
+                display[gp] = str(substitute(part, binding))
         return g
 
     # -- tasks --

@@ -23,6 +23,7 @@ for ``inform``, whose description reads the child's true state); per-node flags 
 from __future__ import annotations
 
 import heapq
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -169,6 +170,7 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
     max_states = limits.max_states if max_states is None else max_states
     max_depth = limits.max_depth if max_depth is None else max_depth
     stats = Stats() if stats is None else stats
+    started = time.perf_counter()
     if budget is None:
         budget = Budget(limits.timeout if timeout is None else timeout,
                         limits.max_memory if max_memory is None else max_memory)
@@ -192,7 +194,7 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
     root = gr.add(root_state, 0, 0)
     stats.generated = stats.distinct = 1
     stats.max_worlds = len(root_state.worlds)
-    heap: list[tuple[Cost, int, int]] = [(0, 0, root)]
+    heap: list[tuple[Cost, int]] = [(0, root)]  # by g, then node id (creation order)
     level: Cost = 0
     status, reason = "unsolvable", ""
     values: Values | None = None
@@ -200,7 +202,7 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
     live: LiveWorst | None = None  # worst-case values, kept once the root is solved
     try:
         while heap:
-            g, _, n = heapq.heappop(heap)
+            g, n = heapq.heappop(heap)
             if gr.status[n] != OPEN or g > gr.g[n]:
                 continue
             if g > level:
@@ -240,7 +242,7 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
         live = values = None
         oom = budget.out_of_memory()
         status, reason, optimal = oom.status, oom.reason, False
-    stats.time_s = budget.elapsed()
+    stats.time_s = time.perf_counter() - started  # the search alone, values included
     return SearchOutcome(gr, root, stats, status, values, optimal, reason)
 
 
@@ -248,7 +250,7 @@ def _move_key(m: Move) -> tuple[object, ...]:
     return (KIND_ORDER[m.kind], m.label, m.child is None, m.child or ())
 
 
-def _expand(gr: Graph, n: int, heap: list[tuple[Cost, int, int]], stats: Stats,
+def _expand(gr: Graph, n: int, heap: list[tuple[Cost, int]], stats: Stats,
             max_depth: int) -> None:
     sem = gr.sem
     es = gr.states[n]
@@ -280,11 +282,11 @@ def _expand(gr: Graph, n: int, heap: list[tuple[Cost, int, int]], stats: Stats,
             stats.distinct += 1
             if len(child.worlds) > stats.max_worlds:
                 stats.max_worlds = len(child.worlds)
-            heapq.heappush(heap, (g1, c, c))
+            heapq.heappush(heap, (g1, c))
         else:
             if g1 < gs[c] and status[c] == OPEN:
                 gs[c], gr.depth[c] = g1, d0
-                heapq.heappush(heap, (g1, c, c))
+                heapq.heappush(heap, (g1, c))
             gr.add_parent(c, n)
         edges.append(Edge(gr.descriptor(m, c), c))
     gr.edges[n] = tuple(edges)

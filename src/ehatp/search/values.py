@@ -183,6 +183,9 @@ class LiveWorst:
     than 0); if any other move could cost 0 the root is recomputed by a full pass instead."""
 
     def __init__(self, gr: Graph, budget: Budget | None = None) -> None:
+        from .andor import GOAL
+
+        self.goal = GOAL
         self.gr = gr
         self.budget = budget
         self.value, _ = knuth(gr, budget)
@@ -207,10 +210,8 @@ class LiveWorst:
 
     def _eval(self, n: int) -> Cost | float:
         """``n``'s equation on the current values of its children."""
-        from .andor import GOAL
-
         gr, value = self.gr, self.value
-        if gr.status[n] == GOAL:
+        if gr.status[n] == self.goal:
             return 0
         edges = gr.edges[n]
         if gr.states[n].turn == 0:  # robot: the best option
