@@ -16,16 +16,16 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
-
-from rich import box
-from rich.table import Table
+from typing import TYPE_CHECKING, Any
 
 from ..errors import EhatpError
 from ..model.domain import DomainError
 from ..model.problem import load
 from ..search.planner import solve
 from .examples import examples_dir
+
+if TYPE_CHECKING:
+    from rich.table import Table
 
 
 @dataclass(frozen=True)
@@ -195,6 +195,9 @@ def format_table(rows: Sequence[dict[str, Any]]) -> str:
 
 def rich_table(rows: Sequence[dict[str, Any]]) -> Table:
     """The same table for a terminal."""
+    from rich import box
+    from rich.table import Table
+
     table = Table(title=TITLE, title_justify="left", caption=headline(rows),
                   caption_justify="left", box=box.SIMPLE_HEAD, pad_edge=False)
     for i, c in enumerate(_COLUMNS):
@@ -210,8 +213,6 @@ def rich_table(rows: Sequence[dict[str, Any]]) -> Table:
     return table
 
 
-__all__ = ["REQUIRED_KEYS", "TABLE1", "PaperRow", "format_table", "headline", "instance_key",
-           "rich_table", "run_instance", "run_table1", "totals"]
 
 
 # --- scaling ---------------------------------------------------------------------------------
@@ -312,6 +313,16 @@ problem = ehatp.load(path)
 kw = {"timeout": timeout}
 if max_memory and "max_memory" in inspect.signature(ehatp.solve).parameters:
     kw["max_memory"] = max_memory
+def peak_mb():
+    # VmHWM: this process image's peak (ru_maxrss would also count the parent's size at fork)
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 t0 = time.perf_counter()
 result = ehatp.solve(problem, **kw)
 text = result.policy.to_json() if result.policy is not None else None
@@ -323,7 +334,7 @@ print(json.dumps({
     "process_s": t1 - t_start, "search_ms": st.get("time_ms"),
     "generated": st.get("generated"), "distinct": st.get("distinct"),
     "max_worlds": st.get("max_worlds"),
-    "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+    "peak_mb": peak_mb(),
     "policy_nodes": None if pol is None else len(pol.nodes),
     "policy_bytes": None if text is None else len(text.encode()),
     "cost": None if pol is None else (float(pol.cost) if pol.cost is not None else None),
@@ -370,3 +381,123 @@ def run_point(point: GridPoint, *, timeout: float, max_memory: int = 0,
     row["states_per_s"] = round(data["generated"] / t) if t and data["generated"] else None
     row["error"] = None if data["status"] == "solved" else data["reason"]
     return row
+
+
+def select_points(max_size: int | None = None, only: Sequence[str] | None = None
+                  ) -> list[GridPoint]:
+    """The grid points named by ``only`` (shell patterns on instance names, e.g.
+    ``cubes-c9-*``; any size) or else all up to ``max_size``, smallest first."""
+    import fnmatch
+
+    pts = scaling_grid()
+    if only:
+        return [p for p in pts if any(fnmatch.fnmatchcase(p.name, o) for o in only)]
+    return [p for p in pts if max_size is None or p.size <= max_size]
+
+
+ScalingNotify = Callable[[GridPoint, int, int, int], None]  # (point, index, count, run)
+
+
+def run_scaling(points: Sequence[GridPoint], *, timeout: float, max_memory: int = 0,
+                repeat: int = 1, src: str | None = None,
+                notify: ScalingNotify | None = None) -> list[dict[str, Any]]:
+    """Run every point ``repeat`` times, each in its own process; one row per point with the
+    medians of time, states/s and peak memory (the counts are the same every run)."""
+    import statistics
+
+    rows = []
+    for i, p in enumerate(points):
+        runs = []
+        for r in range(max(1, repeat)):
+            if notify is not None:
+                notify(p, i, len(points), r)
+            runs.append(run_point(p, timeout=timeout, max_memory=max_memory, src=src))
+            if runs[-1]["status"] not in ("solved", "unsolvable"):
+                break  # a limit or a crash: repeating it tells nothing more
+        row = dict(runs[-1])
+        row["runs"] = len(runs)
+        for k in ("time_s", "peak_mb", "states_per_s"):
+            xs = [x[k] for x in runs if x.get(k) is not None]
+            row[k] = statistics.median(xs) if xs else None
+        rows.append(row)
+    return rows
+
+
+SCALING_COLUMNS = ("instance", "status", "time s", "generated", "distinct", "states/s", "|W|",
+                   "peak MB", "policy nodes", "policy KB")
+
+
+def scaling_cells(r: dict[str, Any]) -> list[str]:
+    def n(x: Any, fmt: str = ",") -> str:
+        return "-" if x is None else format(x, fmt)
+
+    kb = None if r.get("policy_bytes") is None else r["policy_bytes"] / 1024
+    status = r["status"] if r.get("optimal", True) or r["status"] != "solved" else "solved*"
+    return [r["instance"], status, n(r.get("time_s"), ".2f"), n(r.get("generated")),
+            n(r.get("distinct")), n(r.get("states_per_s")), n(r.get("max_worlds")),
+            n(r.get("peak_mb"), ".0f"), n(r.get("policy_nodes")), n(kb, ",.0f")]
+
+
+SCALING_TITLE = ("Scaling: generated problems, one fresh process each (time = median wall time "
+                 "of solve() and serialising the policy as JSON; peak MB = the process's maximum "
+                 "resident size)")
+
+
+def format_scaling(rows: Sequence[dict[str, Any]]) -> str:
+    """Plain aligned text."""
+    grid = [list(SCALING_COLUMNS), *[scaling_cells(r) for r in rows]]
+    widths = [max(len(row[i]) for row in grid) for i in range(len(SCALING_COLUMNS))]
+
+    def line(cells: list[str]) -> str:
+        return "  ".join(c.ljust(w) if i < 2 else c.rjust(w)
+                         for i, (c, w) in enumerate(zip(cells, widths, strict=True))).rstrip()
+
+    out = [SCALING_TITLE, "", line(grid[0]), "  ".join("-" * w for w in widths)]
+    out += [line(c) for c in grid[1:]]
+    notes = [f"  {r['instance']}: {r['error']}" for r in rows if r.get("error")]
+    if any(r["status"] == "solved" and not r.get("optimal", True) for r in rows):
+        out += ["", "solved* = solved, not proven optimal"]
+    if notes:
+        out += ["", "stopped or failed:", *notes]
+    return "\n".join(out) + "\n"
+
+
+def plot_scaling(series: dict[str, Sequence[dict[str, Any]]], path: str) -> bool:
+    """Time and peak memory against distinct states, one marker set per series (e.g. "before"
+    and "after"), log-log; False (and nothing written) when matplotlib is not installed."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return False
+    fig, (ax_t, ax_m) = plt.subplots(1, 2, figsize=(11, 4.2))
+    markers = "os^Dv<>"
+    for i, (label, rows) in enumerate(series.items()):
+        done = [r for r in rows if r.get("distinct") and r.get("time_s")
+                and r["status"] in ("solved", "unsolvable")]
+        xs = [r["distinct"] for r in done]
+        ax_t.scatter(xs, [r["time_s"] for r in done], marker=markers[i % len(markers)],
+                     label=label, alpha=0.75)
+        ax_m.scatter(xs, [r["peak_mb"] for r in done], marker=markers[i % len(markers)],
+                     label=label, alpha=0.75)
+    for ax, what in ((ax_t, "time (s)"), (ax_m, "peak resident memory (MB)")):
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("distinct states")
+        ax.set_ylabel(what)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend()
+    fig.suptitle("ehatp scaling (one process per instance)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return True
+
+
+__all__ = ["COOKING_TRIPS", "CUBE_TRIPS", "REQUIRED_KEYS", "SCALING_COLUMNS", "TABLE1",
+           "GridPoint", "PaperRow", "format_scaling", "format_table", "headline",
+           "instance_key", "plot_scaling", "rich_table", "run_instance", "run_point",
+           "run_scaling", "run_table1", "scaling_cells", "scaling_grid", "select_points",
+           "totals"]

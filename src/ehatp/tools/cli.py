@@ -48,8 +48,8 @@ app = typer.Typer(
     pretty_exceptions_show_locals=False,
     rich_markup_mode="markdown",  # reflows docstring paragraphs in --help
 )
-bench_app = typer.Typer(help="Re-run the paper's benchmarks and compare with its figures.",
-                        no_args_is_help=True)
+bench_app = typer.Typer(help="Re-run the paper's benchmarks and compare with its figures; "
+                             "measure how the planner scales.", no_args_is_help=True)
 app.add_typer(bench_app, name="bench")
 
 SHOW_PROGRESS_AFTER_S = 0.5  # quick solves never flash a progress line
@@ -436,6 +436,88 @@ def bench_table1(
     for r in failed:
         typer.echo(f"not solved: {r['instance']}: {r['error']}", err=True)
     raise typer.Exit(EXIT_NO_POLICY if failed else EXIT_OK)
+
+
+@bench_app.command("scaling")
+def bench_scaling(
+    max_size: Annotated[int, typer.Option(
+        "--max-size", min=1, help="Run the grid points up to this size (cubes, or places on "
+                                  "the pantry trip for cooking).")] = 5,
+    only: Annotated[list[str] | None, typer.Option(
+        "--only", metavar="PATTERN",
+        help="Run just the instances matching this name pattern, any size (repeatable), e.g. "
+             "--only 'cubes-c9-*' --only cooking-k8.", show_default=False)] = None,
+    timeout: Annotated[float, typer.Option(
+        "--timeout", min=0.1, help="Seconds each instance may take (it is stopped then, and "
+                                   "reported as such).")] = 60.0,
+    max_memory: Annotated[str | None, typer.Option(
+        "--max-memory", metavar="SIZE", help="Resident memory each instance may use, e.g. 2G.",
+        show_default=False)] = None,
+    repeat: Annotated[int, typer.Option(
+        "--repeat", "-n", min=1, help="Runs per instance; times and peaks are medians.")] = 1,
+    json_out: Annotated[Path | None, typer.Option(
+        "--json", help="Also write the rows as JSON to this file ('-' for stdout, which then "
+                       "replaces the table).", show_default=False)] = None,
+    plot: Annotated[Path | None, typer.Option(
+        "--plot", metavar="FILE.png", help="Also plot time and memory against the number of "
+                                           "distinct states (needs ehatp[plot]).",
+        show_default=False)] = None,
+) -> None:
+    """Solve a grid of generated problems, each in a fresh process, and show how time and
+    memory grow: cubes 3-10 split over both tables, 2-3 boxes, transparent or opaque, trips of
+    K=2-8; cooking with trips of K=2-8; and two larger cube instances (12 cubes; 10 cubes with
+    human_reach "any"), run when --only names them or --max-size allows.
+
+    Per instance: time (solve and the policy as JSON), states generated and distinct,
+    states/s, |W|, peak resident memory, and the policy's size (nodes, bytes). Exit 1 if an
+    instance crashed (a stop at --timeout or --max-memory is a result, not a failure).
+    """
+    from . import bench as bench_mod
+
+    memory = 0
+    if max_memory is not None:
+        try:
+            memory = parse_size(max_memory)
+        except ValueError as e:
+            die(f"--max-memory {max_memory}: {e}; write e.g. 2G, 512M or a number of bytes")
+    points = bench_mod.select_points(max_size, only)
+    if not points:
+        what = f"--only {' '.join(only)}" if only else f"--max-size {max_size}"
+        die(f"{what}: no grid instance selected; names look like cubes-c6-b3-opaque-k8, "
+            "cooking-k4")
+    console = stderr_console()
+    status = console.status("") if console is not None else None
+
+    def notify(p: Any, i: int, n: int, run: int) -> None:
+        if status is not None:
+            status.update(f"solving {p.name} ({i + 1}/{n}, run {run + 1}/{repeat})")
+
+    if status is not None:
+        status.start()
+    try:
+        rows = bench_mod.run_scaling(points, timeout=timeout, max_memory=memory,
+                                     repeat=repeat, notify=notify)
+    finally:
+        if status is not None:
+            status.stop()
+    if json_out is not None:
+        data = json.dumps(rows, indent=1) + "\n"
+        if str(json_out) == "-":
+            typer.echo(data, nl=False)
+        else:
+            try:
+                json_out.write_text(data, encoding="utf-8")
+            except OSError as e:
+                die(f"{json_out}: cannot write ({e.strerror or e}); choose another --json file")
+    if str(json_out) != "-":
+        typer.echo(bench_mod.format_scaling(rows), nl=False)
+    if plot is not None and not bench_mod.plot_scaling({"this run": rows}, str(plot)):
+        typer.echo("note: --plot skipped: matplotlib is not installed "
+                   "(pip install 'ehatp[plot]')", err=True)
+    crashed = [r for r in rows if r["status"] in ("crashed", "killed")]
+    for r in crashed:
+        typer.echo(f"failed: {r['instance']}: {r['error']}", err=True)
+    raise typer.Exit(EXIT_NO_POLICY if crashed else EXIT_OK)
 
 
 def _fits(con: Console, table: Any) -> bool:

@@ -1,0 +1,77 @@
+"""How time and memory grow with the problem: the scaling grid, one fresh process per instance.
+
+    .venv/bin/python benchmarks/scaling.py [--max-size N] [--only PATTERN ...] [--timeout S]
+        [--max-memory SIZE] [--repeat N] [--json FILE] [--plot FILE.png] [--baseline FILE.json]
+        [--src DIR]
+
+Same grid and table as ``ehatp bench scaling`` (``ehatp.tools.bench``). ``--src DIR`` times
+another checkout's ``src`` directory with this checkout's grid (how docs/benchmarks.md measured
+"before"); ``--baseline FILE.json`` adds an earlier run's rows to the plot. Timing lives here and
+in that command, never in the unit tests.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+# run the checkout this file lives in, whatever is installed
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "src"))
+
+from ehatp.model.problem import parse_size  # noqa: E402
+from ehatp.tools import bench  # noqa: E402
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--max-size", type=int, default=5, metavar="N",
+                    help="grid points up to this size (default 5)")
+    ap.add_argument("--only", action="append", metavar="PATTERN",
+                    help="instances whose name matches (repeatable), any size")
+    ap.add_argument("--timeout", type=float, default=60.0, metavar="S",
+                    help="seconds per instance (default 60)")
+    ap.add_argument("--max-memory", metavar="SIZE", help="resident memory per instance, e.g. 2G")
+    ap.add_argument("--repeat", "-n", type=int, default=1, metavar="N",
+                    help="runs per instance; times and peaks are medians (default 1)")
+    ap.add_argument("--json", type=Path, help="also write the rows as JSON to this file")
+    ap.add_argument("--plot", type=Path, metavar="FILE.png", help="plot time and memory")
+    ap.add_argument("--baseline", type=Path, action="append", metavar="FILE.json",
+                    help="an earlier run's JSON to plot beside this one (label: file stem)")
+    ap.add_argument("--src", metavar="DIR", help="time the ehatp package under DIR instead")
+    args = ap.parse_args(argv)
+    if args.repeat < 1:
+        ap.error("--repeat must be at least 1")
+    try:
+        memory = parse_size(args.max_memory) if args.max_memory else 0
+    except ValueError as e:
+        ap.error(f"--max-memory: {e}")
+    points = bench.select_points(args.max_size, args.only)
+    if not points:
+        ap.error("no grid instance selected")
+
+    def notify(p: bench.GridPoint, i: int, n: int, run: int) -> None:
+        if sys.stderr.isatty():
+            print(f"\r\033[Ksolving {p.name} ({i + 1}/{n}, run {run + 1}/{args.repeat})",
+                  end="", file=sys.stderr, flush=True)
+
+    rows = bench.run_scaling(points, timeout=args.timeout, max_memory=memory,
+                             repeat=args.repeat, src=args.src, notify=notify)
+    if sys.stderr.isatty():
+        print("\r\033[K", end="", file=sys.stderr, flush=True)
+    if args.json is not None:
+        args.json.write_text(json.dumps(rows, indent=1) + "\n", encoding="utf-8")
+    sys.stdout.write(bench.format_scaling(rows))
+    if args.plot is not None:
+        series = {f.stem: json.loads(f.read_text(encoding="utf-8"))
+                  for f in args.baseline or []}
+        series["this run" if series else "ehatp"] = rows
+        if not bench.plot_scaling(series, str(args.plot)):
+            print("note: --plot skipped: matplotlib is not installed (pip install 'ehatp[plot]')",
+                  file=sys.stderr)
+    return 1 if any(r["status"] in ("crashed", "killed") for r in rows) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

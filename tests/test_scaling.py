@@ -1,0 +1,143 @@
+"""The scaling benchmark (``ehatp bench scaling``, ``benchmarks/scaling.py``): its grid, the
+waypoint options that make longer trips, and a run of the smallest grid points. Nothing here
+measures speed."""
+
+from __future__ import annotations
+
+import builtins
+import json
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+from typer.testing import CliRunner
+
+import ehatp
+from ehatp.domains import cooking, cubes
+from ehatp.tools import bench
+from ehatp.tools.cli import app
+
+ROOT = Path(__file__).resolve().parents[1]
+runner = CliRunner()
+SMALL = ["cubes-c3-b2-transparent-k2", "cubes-c3-b2-opaque-k2", "cooking-k2"]
+
+
+def test_grid_names_are_unique_and_smallest_first() -> None:
+    grid = bench.scaling_grid()
+    names = [p.name for p in grid]
+    assert len(names) == len(set(names))
+    assert [p.size for p in grid] == sorted(p.size for p in grid)
+    cube = [p for p in grid if p.family == "cubes" and p.reach == "fetched" and p.cubes <= 10]
+    assert {p.cubes for p in cube} == set(range(3, 11))
+    assert {p.boxes for p in cube} == {2, 3} and {p.K for p in cube} == {2, 4, 6, 8}
+    assert {p.transparent for p in cube} == {True, False}
+    assert {p.K for p in grid if p.family == "cooking"} == {2, 4, 6, 8}
+    assert {"cubes-c12-b2-opaque-k2", "cubes-c10-b2-opaque-k2-any"} <= set(names)
+
+
+def test_selection() -> None:
+    assert all(p.size <= 3 for p in bench.select_points(3))
+    assert [p.name for p in bench.select_points(3, ["cubes-c12-*"])] == [
+        "cubes-c12-b2-opaque-k2"]
+    assert bench.select_points(None, ["nothing-like-this"]) == []
+
+
+@pytest.mark.parametrize("name", ["cubes-c3-b2-opaque-k6", "cubes-c3-b2-transparent-k8",
+                                  "cooking-k6", "cooking-k8"])
+def test_long_trips_solve_and_validate(tmp_path: Path, name: str) -> None:
+    p = next(x for x in bench.scaling_grid() if x.name == name)
+    f = tmp_path / f"{name}.toml"
+    f.write_text(p.toml(), encoding="utf-8")
+    prob = ehatp.load(f)
+    r = ehatp.solve(prob)
+    assert r.status == "solved" and r.optimal and r.policy is not None
+    assert ehatp.validate(prob, r.policy).ok
+
+
+def test_waypoints_make_the_trip_longer(tmp_path: Path) -> None:
+    from ehatp.epistemic.semantics import Semantics
+    from ehatp.model.grounding import ground_problem
+
+    # K=6 cubes: no turning, two places on the way; the human leaves for the first of them
+    p = next(x for x in bench.scaling_grid() if x.name == "cubes-c3-b2-opaque-k6")
+    f = tmp_path / "k6.toml"
+    f.write_text(p.toml(), encoding="utf-8")
+    sem = Semantics(ground_problem(ehatp.load(f)))
+    labels = [m.label for m in sem.moves(sem.initial())]
+    assert "move(mt, way1)" in labels and "move(mt, ot)" not in labels
+    assert cubes.make_domain(waypoints=2).name == "cubes-way2"
+    assert cooking.make_domain(waypoints=1).name == "cooking-way1"
+    assert cubes.make_domain().name == "cubes"  # the default is unchanged
+
+
+@pytest.mark.parametrize("bad", [-1, 1.5, True, "2"])
+def test_bad_waypoints(bad: object) -> None:
+    with pytest.raises(ValueError, match="waypoints"):
+        cubes.make_domain(waypoints=bad)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="waypoints"):
+        cooking.make_domain(waypoints=bad)  # type: ignore[arg-type]
+
+
+def test_bench_scaling_runs_the_smallest_points(tmp_path: Path) -> None:
+    out = tmp_path / "s.json"
+    args = ["bench", "scaling", "--timeout", "60", "--json", str(out)]
+    for name in SMALL:
+        args += ["--only", name]
+    r = runner.invoke(app, args)
+    assert r.exit_code == 0, r.output
+    rows = json.loads(out.read_text(encoding="utf-8"))
+    assert [x["instance"] for x in rows] == [p.name for p in bench.select_points(None, SMALL)]
+    for x in rows:
+        assert x["status"] == "solved" and x["optimal"], x
+        assert x["generated"] >= x["distinct"] > 0 and x["max_worlds"] >= 1
+        assert x["peak_mb"] > 0 and x["time_s"] > 0 and x["states_per_s"] > 0
+        assert x["policy_nodes"] > 0 and x["policy_bytes"] > 0
+    for name in SMALL:
+        assert name in r.stdout
+
+
+def test_bench_scaling_stops_an_instance_at_its_timeout(tmp_path: Path) -> None:
+    r = runner.invoke(app, ["bench", "scaling", "--only", "cubes-c9-b3-opaque-k4",
+                            "--timeout", "0.5", "--json", "-"])
+    assert r.exit_code == 0, r.output
+    (row,) = json.loads(r.stdout)
+    assert row["status"] == "timeout" and "time limit" in row["error"]
+
+
+def test_bench_scaling_unknown_instance_is_one_line() -> None:
+    r = runner.invoke(app, ["bench", "scaling", "--only", "P9"])
+    assert r.exit_code == 2 and "no grid instance" in r.stderr
+
+
+def test_plot_is_skipped_without_matplotlib(monkeypatch: pytest.MonkeyPatch,
+                                            tmp_path: Path) -> None:
+    real = builtins.__import__
+
+    def no_matplotlib(name: str, *args: Any, **kwargs: Any) -> Any:
+        if name.startswith("matplotlib"):
+            raise ImportError(name)
+        return real(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_matplotlib)
+    assert not bench.plot_scaling({"x": []}, str(tmp_path / "p.png"))
+    assert not (tmp_path / "p.png").exists()
+
+
+def test_plot_writes_an_image(tmp_path: Path) -> None:
+    pytest.importorskip("matplotlib")
+    rows = [{"instance": "a", "status": "solved", "distinct": 100, "time_s": 0.1,
+             "peak_mb": 30.0}, {"instance": "b", "status": "solved", "distinct": 1000,
+                                "time_s": 1.0, "peak_mb": 60.0}]
+    f = tmp_path / "p.png"
+    assert bench.plot_scaling({"before": rows, "after": rows}, str(f))
+    assert f.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_scaling_script_prints_the_table(tmp_path: Path) -> None:
+    r = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "scaling.py"), "--only",
+                        "cooking-k2", "--json", str(tmp_path / "s.json")],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert "cooking-k2" in r.stdout and "states/s" in r.stdout
