@@ -2,23 +2,28 @@
 
     .venv/bin/python benchmarks/scaling.py [--max-size N] [--only PATTERN ...] [--timeout S]
         [--max-memory SIZE] [--repeat N] [--json FILE] [--plot FILE.png] [--baseline FILE.json]
-        [--src DIR]
+        [--src DIR] [--versus DIR]
 
 Same grid and table as ``ehatp bench scaling`` (``ehatp.tools.bench``). ``--src DIR`` times
 another checkout's ``src`` directory with this checkout's grid (how docs/benchmarks.md measured
-"before"); ``--baseline FILE.json`` adds an earlier run's rows to the plot. Timing lives here and
-in that command, never in the unit tests.
+"before"); ``--versus DIR`` runs every instance with both, alternately (``DIR`` first, then
+this checkout, run after run) so that a noisy machine's drift falls on both alike, and prints
+and plots the two side by side; ``--baseline FILE.json`` adds an earlier run's rows to the
+plot. Timing lives here and in that command, never in the unit tests.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import statistics
 import sys
 from pathlib import Path
+from typing import Any
 
-# run the checkout this file lives in, whatever is installed
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "src"))
+# run the checkout this file lives in, whatever is installed (the child processes too)
+SRC = str(Path(__file__).resolve().parent.parent / "src")
+sys.path.insert(0, SRC)
 
 from ehatp.model.problem import parse_size  # noqa: E402
 from ehatp.tools import bench  # noqa: E402
@@ -40,7 +45,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--baseline", type=Path, action="append", metavar="FILE.json",
                     help="an earlier run's JSON to plot beside this one (label: file stem)")
     ap.add_argument("--src", metavar="DIR", help="time the ehatp package under DIR instead")
+    ap.add_argument("--versus", metavar="DIR",
+                    help="also time the ehatp package under DIR, alternating run by run")
     args = ap.parse_args(argv)
+    args.src = args.src or SRC
     if args.repeat < 1:
         ap.error("--repeat must be at least 1")
     try:
@@ -56,21 +64,50 @@ def main(argv: list[str] | None = None) -> int:
             print(f"\r\033[Ksolving {p.name} ({i + 1}/{n}, run {run + 1}/{args.repeat})",
                   end="", file=sys.stderr, flush=True)
 
-    rows = bench.run_scaling(points, timeout=args.timeout, max_memory=memory,
-                             repeat=args.repeat, src=args.src, notify=notify)
+    if args.versus is None:
+        series = {"ehatp": bench.run_scaling(points, timeout=args.timeout, max_memory=memory,
+                                             repeat=args.repeat, src=args.src, notify=notify)}
+    else:  # one point at a time, the two versions alternating run by run
+        series = {"versus": [], "this checkout": []}
+        for i, p in enumerate(points):
+            for r in range(args.repeat):
+                notify(p, i, len(points), r)
+                for label, src in (("versus", args.versus), ("this checkout", args.src)):
+                    series[label] += bench.run_scaling([p], timeout=args.timeout,
+                                                       max_memory=memory, src=src)
+        series = {k: _medians(v) for k, v in series.items()}
     if sys.stderr.isatty():
         print("\r\033[K", end="", file=sys.stderr, flush=True)
+    data = series["ehatp"] if args.versus is None else series
     if args.json is not None:
-        args.json.write_text(json.dumps(rows, indent=1) + "\n", encoding="utf-8")
-    sys.stdout.write(bench.format_scaling(rows))
+        args.json.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
+    for label, rows in series.items():
+        if args.versus is not None:
+            print(f"== {label}: {args.versus if label == 'versus' else args.src}")
+        sys.stdout.write(bench.format_scaling(rows))
     if args.plot is not None:
-        series = {f.stem: json.loads(f.read_text(encoding="utf-8"))
-                  for f in args.baseline or []}
-        series["this run" if series else "ehatp"] = rows
-        if not bench.plot_scaling(series, str(args.plot)):
+        shown = {f.stem: json.loads(f.read_text(encoding="utf-8")) for f in args.baseline or []}
+        shown.update(series)
+        if not bench.plot_scaling(shown, str(args.plot)):
             print("note: --plot skipped: matplotlib is not installed (pip install 'ehatp[plot]')",
                   file=sys.stderr)
-    return 1 if any(r["status"] in ("crashed", "killed") for r in rows) else 0
+    return 1 if any(r["status"] in ("crashed", "killed") for rows in series.values()
+                    for r in rows) else 0
+
+
+def _medians(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """One row per instance: the last run's, with the medians of time, states/s and peak."""
+    by: dict[str, list[dict[str, Any]]] = {}
+    for r in rows:
+        by.setdefault(r["instance"], []).append(r)
+    out = []
+    for runs in by.values():
+        row = dict(runs[-1], runs=len(runs))
+        for k in ("time_s", "peak_mb", "states_per_s"):
+            xs = [x[k] for x in runs if x.get(k) is not None]
+            row[k] = statistics.median(xs) if xs else None
+        out.append(row)
+    return out
 
 
 if __name__ == "__main__":

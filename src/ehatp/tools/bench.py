@@ -434,8 +434,12 @@ def scaling_cells(r: dict[str, Any]) -> list[str]:
     kb = None if r.get("policy_bytes") is None else r["policy_bytes"] / 1024
     status = r["status"] if r.get("optimal", True) or r["status"] != "solved" else "solved*"
     return [r["instance"], status, n(r.get("time_s"), ".2f"), n(r.get("generated")),
-            n(r.get("distinct")), n(r.get("states_per_s")), n(r.get("max_worlds")),
+            n(r.get("distinct")), n(_round(r.get("states_per_s"))), n(r.get("max_worlds")),
             n(r.get("peak_mb"), ".0f"), n(r.get("policy_nodes")), n(kb, ",.0f")]
+
+
+def _round(x: float | None) -> int | None:
+    return None if x is None else round(x)
 
 
 SCALING_TITLE = ("Scaling: generated problems, one fresh process each (time = median wall time "
