@@ -6,12 +6,18 @@ each other at every step. The robot asks :meth:`Executor.next_robot_action`, doe
 it with :meth:`Executor.robot_action_done`; what the human does is reported with
 :meth:`Executor.observe_human_action`, which raises :class:`UncoveredHumanAction` when the
 policy has no branch for it. A problem's fixed opening (``[problem] after``) is replayed first,
-as moves the executor expects. See ``docs/simulation.md``.
+as moves the executor expects (or at once, as moves already made: :meth:`Executor.replay_opening`).
+
+When the human leaves the policy, :meth:`Executor.as_problem` states the execution so far as a new
+problem and :meth:`Executor.replan` plans from where the robot is and follows the new policy. See
+``docs/simulation.md`` and ``docs/execution.md``.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 from ..epistemic.semantics import ACTION, ASK, INFORM, WAIT, Move, Semantics, bits_of
 from ..epistemic.state import HUMAN, ROBOT, EState, Worlds, states_of
@@ -20,6 +26,9 @@ from ..model.formula import conj
 from ..model.grounding import FINISH, Grounded, ground_problem
 from ..model.problem import Cost, Problem
 from ..policy_format import Policy, PolicyNode
+
+if TYPE_CHECKING:
+    from ..search.planner import Result
 
 MAX_WORLDS_LISTED = 8
 
@@ -50,14 +59,16 @@ class UncoveredHumanAction(ExecutionError):
 class Action:
     """One move in the domain's vocabulary. ``name``/``args`` split an operator call
     (``place``, ``("w", "box2")``); for ``inform`` the args are the literals told, for ``ask``
-    the question; ``wait`` and ``pass`` have none."""
+    the question; ``wait`` and ``pass`` have none. ``told`` holds the literals the robot says
+    while doing an action or a wait (``speech = "with-action"``: ``inform(x) + place(r, b)``)."""
 
     agent: str
-    kind: str  # action | wait | pass | inform | ask
+    kind: str  # action | wait | pass | inform | ask | silence
     label: str
     name: str
     args: tuple[str, ...]
     cost: Cost
+    told: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -79,7 +90,9 @@ class WorldView:
 class Step:
     """One executed move: the states around it and the policy node it reached (None within
     the opening). ``assessed`` holds the human's worlds just before situation assessment, when
-    it ran on this step."""
+    it ran on this step. ``replanned`` marks a human move the policy did not cover, after which
+    the execution follows a new policy (:meth:`Executor.replan`); ``node`` is that policy's
+    root."""
 
     index: int
     action: Action
@@ -88,6 +101,7 @@ class Step:
     node: PolicyNode | None
     opening: bool
     assessed: Worlds | None
+    replanned: bool = False
 
 
 class _TracingSemantics(Semantics):
@@ -235,6 +249,96 @@ class Executor:
             raise UncoveredHumanAction(move.label, expected, possible,
                                        f"{who} did {move.label}, which {where} does not cover")
         return self._advance(move)
+
+    # -- the opening, and leaving the policy ----------------------------------------------------
+    def replay_opening(self) -> list[Step]:
+        """Play what is left of the problem's fixed opening at once, as moves already made (the
+        problem says the policy starts after them), instead of expecting them one by one;
+        returns their steps. Nothing happens when there is no opening left."""
+        steps = []
+        while self.node is None:
+            steps.append(self._advance(self._follow(self._opening[0])))
+        return steps
+
+    def as_problem(self) -> Problem:
+        """The execution so far as a new problem: the same problem whose fixed opening
+        (``[problem] after``) is every move played so far, then what is left of the original
+        opening. Solving it plans from where the execution is now.
+
+        Why the history and not the current epistemic state as a new start: a problem's start
+        cannot say all that the rules read in a state -- the K counter, the count of passive
+        moves, a forced wait, agendas part-way through a method, the speech opening -- and a new
+        start is assessed again (``Semantics.initial``). Replaying the moves through the same
+        semantics gives exactly the tracked state (:meth:`replan` checks the new policy's root
+        against it); the cost is a replay of the moves, linear in the history."""
+        played = tuple(f"{s.action.agent} {s.action.label}" for s in self.history)
+        desc = self.problem.description
+        return dataclasses.replace(
+            self.problem, after=played + tuple(self._opening), notes=(),
+            description=(f"{desc}; " if desc else "") + f"replanned after {len(played)} moves")
+
+    def replan(self, action: str | Action | None = None, **solve_options: Any) -> Result:
+        """Plan again from where the execution is, and follow the new policy from its root.
+
+        ``action``, when given, is a human move the human model allows now
+        (:meth:`possible_human_moves`) that the policy may not cover: it is applied to the
+        tracked state first (a step marked ``replanned``). Then :meth:`as_problem` is solved
+        (``solve_options`` go to :func:`ehatp.solve`) and its policy replaces :attr:`policy`
+        and :attr:`problem`. Raises :class:`UncoveredHumanAction` when ``action`` is not a move
+        of the human here or fails, and :class:`ExecutionError` when no policy is found; nothing
+        changes then. Returns the solver's result."""
+        from ..search.planner import solve
+
+        move: Move | None = None
+        if action is not None:
+            if self.done or self.state.turn != HUMAN:
+                raise ExecutionError(f"it is not {self.human_name}'s turn: "
+                                     + ("the task is done" if self.done
+                                        else f"{self.robot_name} is to move"))
+            label = action.label if isinstance(action, Action) else self.strip_agent(action)
+            moves = self.sem.moves(self.state)
+            possible = [m.label for m in moves]
+            expected = [a.label for a in self.expected_human_actions()]
+            who = self.human_name
+            move = next((m for m in moves if _norm(m.label) == _norm(label)), None)
+            if move is None:
+                raise UncoveredHumanAction(label, expected, possible,
+                                           f"{who} did {label}, which is not a move of {who} "
+                                           f"here (the model allows {', '.join(possible)})")
+            if move.child is None:
+                raise UncoveredHumanAction(move.label, expected, possible,
+                                           f"{who} did {move.label}, which fails: "
+                                           f"{move.failure}")
+        problem = self.as_problem()
+        if move is not None:  # played after the history; the rest of the opening is dropped
+            problem = dataclasses.replace(problem, after=tuple(
+                f"{s.action.agent} {s.action.label}" for s in self.history)
+                + (f"{self.human_name} {move.label}",))
+        result = solve(problem, **solve_options)
+        if result.policy is None:
+            raise ExecutionError(f"no policy from here: {result.reason or result.status}")
+        if move is None and self.node is None:  # within the opening: the policy follows it
+            self.problem, self.policy = problem, result.policy
+            return result
+        before, assessed = self.state, None
+        if move is not None:
+            assert move.child is not None
+            assessed = self.sem.seen.get((move.child.true, move.child.worlds))
+            self.state = move.child
+        root = result.policy.root
+        try:
+            self._check(root)
+        except PolicyMismatch:
+            self.state = before
+            raise
+        self.sem.seen.clear()
+        self.problem, self.policy, self.node, self._opening = problem, result.policy, root, []
+        if move is not None:
+            self.history.append(Step(len(self.history) + 1, self._action(move, before.true),
+                                     before, self.state, root, False,
+                                     assessed if assessed != self.state.worlds else None,
+                                     replanned=True))
+        return result
 
     # -- what the human believes ------------------------------------------------------------------
     def human_worlds(self) -> list[WorldView]:
@@ -387,8 +491,8 @@ class Executor:
             node = self.policy.nodes[pm.to]
             self.node = node
             self._check(node)
-        step = Step(len(self.history) + 1, self._action(move), before, self.state, node,
-                    opening, assessed if assessed != self.state.worlds else None)
+        step = Step(len(self.history) + 1, self._action(move, before.true), before, self.state,
+                    node, opening, assessed if assessed != self.state.worlds else None)
         self.history.append(step)
         return step
 
@@ -414,9 +518,13 @@ class Executor:
                                  f"semantics {[want.get(k, False) for k in bad]}); "
                                  "the policy does not fit this problem, solve it again")
 
-    def _action(self, m: Move) -> Action:
+    def _action(self, m: Move, t: int | None = None) -> Action:
+        """``m`` in the domain's vocabulary, played in the true state ``t`` (default: now)."""
         name, args, label = self.sem.describe(m)
-        return Action(self.sem.names[m.agent], m.kind, label, name, args, m.cost)
+        told: tuple[str, ...] = ()
+        if m.kind in (ACTION, WAIT) and m.atoms:  # said while acting (§5), as labelled
+            told = self.sem.literals(self.state.true if t is None else t, m.atoms)
+        return Action(self.sem.names[m.agent], m.kind, label, name, args, m.cost, told)
 
     def _agenda(self, ag: tuple[int, ...]) -> list[str]:
         return [self.grounded.task_names[t] for t in ag if t != FINISH]
