@@ -9,6 +9,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -56,25 +57,58 @@ def test_timeout_stops_the_value_pass(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def test_timeout_stops_extraction(monkeypatch: pytest.MonkeyPatch) -> None:
-    from ehatp.search import planner
+    from ehatp.search import policy
 
-    def slow_extract(*args: object, **kwargs: object) -> None:
-        time.sleep(2)
-        raise AssertionError("extraction should have been stopped before it began")
+    real = policy.bits_of
 
-    monkeypatch.setattr(planner, "extract", slow_extract)
-    # the search and the values fit in the time; extraction starts past it
-    real = planner.search
+    def slow_bits_of(m: int) -> list[int]:  # once per policy node: a slow extraction
+        time.sleep(0.05)
+        return real(m)
 
-    def search_then_wait(*args: object, **kwargs: object) -> andor.SearchOutcome:
-        out = real(*args, **kwargs)  # type: ignore[arg-type]
-        time.sleep(0.8)
-        return out
-
-    monkeypatch.setattr(planner, "search", search_then_wait)
-    r = ehatp.solve(ehatp.load(CUBES / "p1.toml"), timeout=0.2)
+    monkeypatch.setattr(policy, "bits_of", slow_bits_of)
+    t0 = time.perf_counter()
+    r = ehatp.solve(ehatp.load(CUBES / "p4.toml"), timeout=0.3)
+    assert time.perf_counter() - t0 < 0.3 + 5
     assert r.status == "timeout" and r.policy is None
     assert "during extraction" in r.reason
+
+
+def test_a_stopped_write_leaves_no_file(tmp_path: Path) -> None:
+    r = ehatp.solve(ehatp.load(CUBES / "p1.toml"))
+    assert r.policy is not None
+
+    def stop() -> None:
+        raise LimitReached("timeout", "time limit")
+
+    f = tmp_path / "p.json"
+    with pytest.raises(LimitReached):
+        r.policy.write(f, check=stop)
+    assert not f.exists()
+    r.policy.write(f, check=lambda: None)
+    assert f.read_text(encoding="utf-8") == r.policy.to_json()
+
+
+def test_cli_timeout_during_writing_writes_nothing(monkeypatch: pytest.MonkeyPatch,
+                                                   tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from ehatp.tools import cli
+
+    real = cli.solve
+
+    def solve_then_wait(*args: Any, **kwargs: Any) -> Any:
+        out = real(*args, **kwargs)
+        time.sleep(1.0)  # past the time limit (0.2 s + 5 % + 0.5 s) before writing starts
+        return out
+
+    monkeypatch.setattr(cli, "solve", solve_then_wait)
+    target = tmp_path / "p.json"
+    r = CliRunner().invoke(cli.app, ["solve", str(CUBES / "p1.toml"), "--timeout", "0.2",
+                                     "--out", str(target)])
+    assert r.exit_code == 1, r.output
+    assert "time limit of 0.2 s" in r.stdout.splitlines()[0]
+    assert "during writing" in r.stdout.splitlines()[0]
+    assert not target.exists()
 
 
 def test_a_stop_after_the_root_is_solved_keeps_the_best_policy(

@@ -16,7 +16,7 @@ only reads policy files.
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
@@ -256,7 +256,9 @@ class Policy:
 
     # -- JSON ---------------------------------------------------------------------------------
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self, check: Callable[[], None] | None = None) -> dict[str, Any]:
+        """The file's JSON object; ``check`` (e.g. a time limit's) is called every few
+        hundred nodes and may raise to stop the work."""
         return {
             "format": FORMAT, "version": VERSION, "problem": self.problem, "domain": self.domain,
             "agents": self.agents, "K": self.K, "costs": self.costs, "cost": num(self.cost),
@@ -265,24 +267,26 @@ class Policy:
             "objective": self.objective,
             "worst_case": None if self.worst_case is None else num(self.worst_case),
             "expected": None if self.expected is None else num(self.expected),
-            "nodes": [n.to_dict() for n in self.nodes],
+            "nodes": [n.to_dict() for n in _checked(self.nodes, check)],
         }
 
-    def to_json(self) -> str:
+    def to_json(self, check: Callable[[], None] | None = None) -> str:
         """The file's text: keys sorted, one node per line, so the same policy always gives
-        the same bytes."""
-        d = self.to_dict()
+        the same bytes. ``check`` as in :meth:`to_dict`."""
+        d = self.to_dict(check)
         parts = []
         for key in sorted(d):
             if key == "nodes":
-                body = ",\n".join(f"  {_dumps(n)}" for n in d["nodes"])
+                body = ",\n".join(f"  {_dumps(n)}" for n in _checked(d["nodes"], check))
                 parts.append(f' "nodes": [\n{body}\n ]')
             else:
                 parts.append(f" {json.dumps(key)}: {_dumps(d[key])}")
         return "{\n" + ",\n".join(parts) + "\n}\n"
 
-    def write(self, path: str | Path) -> None:
-        Path(path).write_text(self.to_json(), encoding="utf-8")
+    def write(self, path: str | Path, check: Callable[[], None] | None = None) -> None:
+        """Write :meth:`to_json` to ``path``; ``check`` as in :meth:`to_dict` (the file is not
+        touched when it stops the work)."""
+        Path(path).write_text(self.to_json(check), encoding="utf-8")
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> Policy:
@@ -416,6 +420,17 @@ def malformed(raw: Any) -> tuple[str, str] | None:
             if not isinstance(m, dict):
                 return f"nodes[{i}].moves[{j}]", f"a move must be an object, got {m!r:.40}"
     return None
+
+
+def _checked(xs: list[Any], check: Callable[[], None] | None) -> Iterator[Any]:
+    """``xs``, calling ``check`` every 256 items (a limit may stop a long write)."""
+    if check is None:
+        yield from xs
+        return
+    for i, x in enumerate(xs):
+        if not i & 255:
+            check()
+        yield x
 
 
 def _dumps(x: Any) -> str:

@@ -76,7 +76,7 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
         try:
             budget.check()
             policy = extract(out.graph, out.root, out.values, problem_name=problem.name,
-                             optimal=optimal, stats=public)
+                             optimal=optimal, stats=public, check=budget.check)
             budget.check()
         except LimitReached as e:
             status, reason, optimal, policy = e.status, e.reason, False, None

@@ -3,6 +3,7 @@ file format lives in :mod:`ehatp.policy_format`), and why no policy exists when 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 from ..epistemic.semantics import ACTION, WAIT, Move, bits_of
@@ -16,7 +17,8 @@ from .values import Values, weighted_mean
 
 
 def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
-            optimal: bool = True, stats: dict[str, Any] | None = None) -> Policy:
+            optimal: bool = True, stats: dict[str, Any] | None = None,
+            check: Callable[[], None] | None = None) -> Policy:
     """The policy the values chose, from ``root``, as a graph (docs/policy-format.md): one
     policy node per search node the policy reaches, memoised by search node, so the work and
     the file are linear in the policy's distinct states however many branches share them.
@@ -25,8 +27,14 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
     Both costs of §7 are computed again on the extracted graph: its worst case (the maximum over
     human branches) and its expected cost (their weighted mean, ``[objective.weights]``); each
     node's ``value`` and the policy's ``cost`` are the objective's. Branches and communications
-    are counted over the graph too (:meth:`Policy.count_branches`)."""
+    are counted over the graph too (:meth:`Policy.count_branches`). ``check`` (e.g. a time
+    limit's, docs/semantics.md §7 "Search") is called once per policy node and may raise to
+    stop the work."""
     sem = gr.sem
+    if check is None:
+        def check() -> None:
+            pass
+
     g = sem.g
     p = g.problem
     r_name, h_name = p.domain.robot_name, p.domain.human_name
@@ -45,6 +53,7 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
         n = stack.pop()
         if n in index:
             continue
+        check()
         index[n] = len(order)
         order.append(n)
         stack.extend(e.child for e in reversed(chosen(n)))
@@ -64,6 +73,7 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
 
     nodes: list[PolicyNode] = []
     for i, n in enumerate(order):
+        check()
         es: EState = gr.states[n]
         t = es.true
         div = 0

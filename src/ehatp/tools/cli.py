@@ -240,15 +240,14 @@ def solve_cmd(
         if result.policy is not None:
             budget.phase = "writing"
             try:
-                budget.check()
-                result.policy.write(target)
+                # the text is made (under the limits) before the file is touched
+                result.policy.write(target, check=budget.check)
                 written = True
             except OSError as e:
                 die(f"{target}: cannot write the policy ({e.strerror or e}); choose another "
                     "--out")
             except (LimitReached, MemoryError) as e:
                 stop = e if isinstance(e, LimitReached) else budget.out_of_memory()
-                target.unlink(missing_ok=True)  # never leave half a policy behind
                 result = dataclasses.replace(result, status=stop.status, policy=None,
                                              reason=stop.reason, optimal=False)
     finally:
@@ -288,7 +287,7 @@ def _summary(prob: Problem, result: Result, wall_ms: float, written: Path | None
                 else " (best found so far, NOT proven optimal)")
         rows.append(("policy", f"written to {written}{note}"))
     elif result.status != "unsolvable":
-        rows.append(("policy", "none found before the search stopped"))
+        rows.append(("policy", "none found before the work stopped"))
     for k, v in rows:
         typer.echo(f"  {k:<15} {v}")
 
