@@ -534,10 +534,12 @@ def main() -> None:
 
 # Other commands live in their own modules and add themselves; imported last so they may
 # import helpers from this module without a circular-import failure.
-from . import render, simulate  # noqa: E402
+from . import bt, execute, render, simulate  # noqa: E402
 
 render.register(app)
 simulate.register(app)
+execute.register(app)
+bt.register(app)
 
 if __name__ == "__main__":
     main()

@@ -15,6 +15,7 @@ problem and :meth:`Executor.replan` plans from where the robot is and follows th
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -249,6 +250,14 @@ class Executor:
             raise UncoveredHumanAction(move.label, expected, possible,
                                        f"{who} did {move.label}, which {where} does not cover")
         return self._advance(move)
+
+    def copy(self) -> Executor:
+        """An independent executor at the same point of the same execution, without grounding
+        the problem again (e.g. to run many executions from one start)."""
+        other = copy.copy(self)
+        other.sem = _TracingSemantics(self.grounded)
+        other.history, other._opening = list(self.history), list(self._opening)
+        return other
 
     # -- the opening, and leaving the policy ----------------------------------------------------
     def replay_opening(self) -> list[Step]:
