@@ -283,6 +283,19 @@ class Policy:
                 parts.append(f" {json.dumps(key)}: {_dumps(d[key])}")
         return "{\n" + ",\n".join(parts) + "\n}\n"
 
+    def _repr_html_(self) -> str:
+        """The offline explorer (``ehatp render --format html``) inline in a Jupyter notebook:
+        the page in a sandboxed ``<iframe srcdoc>``, so that its styles and scripts stay out of
+        the notebook's. See ``docs/notebook.md``."""
+        from html import escape
+
+        from .tools.render import to_html  # lazily: this module stays free of the tools
+
+        page = escape(to_html(self), quote=True)
+        return (f'<iframe srcdoc="{page}" sandbox="allow-scripts" title="ehatp policy '
+                f'{escape(self.problem, quote=True)}" style="width: 100%; height: 640px; '
+                'border: 1px solid #ccc;"></iframe>')
+
     def write(self, path: str | Path, check: Callable[[], None] | None = None) -> None:
         """Write :meth:`to_json` to ``path``; ``check`` as in :meth:`to_dict` (the file is not
         touched when it stops the work)."""

@@ -288,7 +288,11 @@ def build_py_tree(policy: Policy, *, robot: RobotFn, human: HumanFn,
     says what the human did; see :mod:`ehatp.tools.bt_py_trees`. With ``problem`` the robot's
     answers to questions are worked out in advance (:func:`answers_of`). Returns the root
     behaviour (a ``py_trees.behaviour.Behaviour``)."""
-    from . import bt_py_trees
+    try:
+        from . import bt_py_trees
+    except ImportError as e:
+        raise ImportError(f"build_py_tree needs py_trees ({e}): pip install 'ehatp[bt]'"
+                          ) from None
 
     forest = from_policy(policy, None if problem is None else answers_of(problem, policy))
     return bt_py_trees.build(forest, bt_py_trees.Interface(robot, human, on_goal, on_uncovered))

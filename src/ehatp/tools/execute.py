@@ -27,7 +27,7 @@ import typer
 from ..errors import InputError
 from ..model.problem import load
 from ..policy_format import num
-from .common import read_policy, user_errors
+from .common import die, read_policy, user_errors
 from .executor import (
     Action,
     ExecutionError,
@@ -70,9 +70,11 @@ def step_line(ex: Executor, s: Step) -> dict[str, Any]:
 class Session:
     """One execution driven by JSON lines; :meth:`handle` answers one input line."""
 
-    def __init__(self, ex: Executor, emit: Emit, *, replan: bool) -> None:
-        self.ex, self.emit, self.replan = ex, emit, replan
+    def __init__(self, ex: Executor, emit: Emit, *, replan: bool,
+                 save: Path | None = None) -> None:
+        self.ex, self.emit, self.replan, self.save = ex, emit, replan, save
         self.exit: int | None = None  # set when the session is over
+        self.replans = 0
 
     def start(self, source: str) -> None:
         ex = self.ex
@@ -195,20 +197,29 @@ class Session:
             self.exit = EXIT_STOPPED
             return
         assert result.policy is not None
+        self.replans += 1
         stats = result.stats
-        self.emit({"replanned": {
+        info: dict[str, Any] = {
             "action": label, "after": len(ex.history), "status": result.status,
             "cost": num(result.policy.cost), "nodes": len(result.policy.nodes),
             "distinct": stats.get("distinct"), "generated": stats.get("generated"),
-            "time_ms": stats.get("time_ms")}})
+            "time_ms": stats.get("time_ms")}
+        if self.save is not None:
+            path = self.save / f"replan-{self.replans}.json"
+            try:
+                result.policy.write(path)
+                info["policy"] = str(path)
+            except OSError as e:
+                info["policy_error"] = f"{path}: cannot write ({e.strerror or e})"
+        self.emit({"replanned": info})
         self.stepped(ex.history[-1])
 
 
 def run(ex: Executor, stdin: TextIO, emit: Emit, *, replan: bool = False,
-        source: str = "solved now") -> int:
+        source: str = "solved now", save: Path | None = None) -> int:
     """The protocol without the CLI: read ``stdin`` to the goal or its end; returns the exit
-    code."""
-    session = Session(ex, emit, replan=replan)
+    code. ``save``: a folder where each replanned policy is written (``replan-N.json``)."""
+    session = Session(ex, emit, replan=replan, save=save)
     try:
         session.start(source)
     except PolicyMismatch as e:
@@ -246,6 +257,9 @@ def register(app: typer.Typer) -> None:
         replan: bool = typer.Option(
             False, "--replan", help="When the human does something the policy does not cover "
                                     "but the human model allows, plan again from there."),
+        save_replans: Path | None = typer.Option(
+            None, "--save-replans", metavar="DIR", help="Write each replanned policy to "
+            "DIR/replan-N.json (its `after` is the execution so far).", show_default=False),
     ) -> None:
         """Execute a policy live: JSON lines on stdin (what the human did, what the robot
         finished) and on stdout (what the robot should do, what the human believes, the goal,
@@ -269,8 +283,12 @@ def register(app: typer.Typer) -> None:
             except ExecutionError as e:
                 typer.echo(json.dumps({"error": "no-policy", "message": str(e), "line": 0}))
                 raise typer.Exit(EXIT_STOPPED) from None
+        if save_replans is not None and not save_replans.is_dir():
+            die(InputError(str(save_replans), "", "not a folder",
+                           "create it, or give an existing folder to --save-replans").line())
         code = run(ex, sys.stdin, json_lines(sys.stdout), replan=replan,
-                   source=str(policy) if policy is not None else "solved now")
+                   source=str(policy) if policy is not None else "solved now",
+                   save=save_replans)
         raise typer.Exit(code)
 
 
