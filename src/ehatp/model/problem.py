@@ -7,6 +7,7 @@ naming the file, the place and the fix.
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import importlib
 import importlib.util
@@ -314,8 +315,10 @@ def _show(value: Any) -> str:
     return text
 
 
-def load(path: str | Path) -> Problem:
-    """Read a problem TOML file; raise :class:`InputError` on the first mistake."""
+def load(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Problem:
+    """Read a problem TOML file; raise :class:`InputError` on the first mistake.
+
+    ``overrides`` (see :func:`loads`) replace values of the file before it is checked."""
     p = Path(path)
     try:
         raw = p.read_bytes()
@@ -329,6 +332,16 @@ def load(path: str | Path) -> Problem:
         raise InputError(str(path), str(line), f"not a UTF-8 text file (byte "
                          f"0x{raw[e.start]:02x} at offset {e.start})",
                          "give a problem file in TOML, saved as UTF-8") from None
+    return loads(text, path, overrides)
+
+
+def loads(text: str, path: str | Path, overrides: Mapping[str, Any] | None = None) -> Problem:
+    """Read a problem from TOML ``text`` as if it were the file ``path``: errors name that file
+    and a domain ``"file.py:attribute"`` is looked for beside it. ``overrides`` maps dotted keys
+    to values that replace (or add) the file's before anything is checked, so they are checked
+    as if written there: ``{"problem.K": 3, "communication.inform": "anywhere",
+    "domain.turn_before_move": True}``. Raise :class:`InputError` on the first mistake."""
+    p = Path(path)
     if not text.strip():
         raise InputError(str(path), "", "the file is empty",
                          "write a problem (see docs/problem-format.md)")
@@ -340,6 +353,8 @@ def load(path: str | Path) -> Problem:
     except RecursionError:  # the parser recurses per nesting level
         raise InputError(str(path), "", "arrays or tables are nested too deeply",
                          "flatten the file (a problem needs two levels at most)") from None
+    for dotted, value in (overrides or {}).items():
+        _override(str(path), data, dotted, value)
     for k in data:
         if k not in _TOP_KEYS:
             wrong = r.misplaced("", k)
@@ -468,6 +483,21 @@ def _size(r: _Reader, place: str, v: Any) -> int:
     except ValueError:
         raise r.err(place, f"expected a memory size, got {_show(v)}",
                     'write e.g. "2G", "512M" or a number of bytes') from None
+
+
+def _override(file: str, data: dict[str, Any], dotted: str, value: Any) -> None:
+    """Set ``data[a][b][c] = value`` for ``dotted = "a.b.c"``, making missing tables."""
+    keys = dotted.split(".")
+    if not all(keys):
+        raise InputError(file, f"override {dotted!r}", "an empty key",
+                         "write table.key, e.g. problem.K")
+    table = data
+    for i, k in enumerate(keys[:-1]):
+        table = table.setdefault(k, {})
+        if not isinstance(table, dict):
+            raise InputError(file, f"override {dotted}", f"{'.'.join(keys[:i + 1])} is not a "
+                             "table", "override a key inside a table, e.g. problem.K")
+    table[keys[-1]] = copy.deepcopy(value)  # the loader may consume what it reads
 
 
 def _int(r: _Reader, place: str, v: Any) -> int:

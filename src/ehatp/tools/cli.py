@@ -534,12 +534,13 @@ def main() -> None:
 
 # Other commands live in their own modules and add themselves; imported last so they may
 # import helpers from this module without a circular-import failure.
-from . import bt, execute, render, simulate  # noqa: E402
+from . import bt, execute, render, simulate, sweep  # noqa: E402
 
 render.register(app)
 simulate.register(app)
 execute.register(app)
 bt.register(app)
+sweep.register(app)
 
 if __name__ == "__main__":
     main()
