@@ -377,3 +377,13 @@ def test_py_trees_module_builds_the_same_tree(tmp_path: Path) -> None:
     built = trace(lambda r, h: bt.build_py_tree(policy, robot=r, human=h, problem=problem))
     assert generated == built
     assert len(generated) > 5
+
+
+def test_answers_follow_moves_that_share_a_label() -> None:
+    # the 8-cube problem's human reaches move(mt, ot) by several methods (to fetch one cube or
+    # another): one label, several moves, each to its own node
+    problem, policy = solved(ROOT / "tests" / "data" / "cubes-8.toml")
+    assert any(len({m.action for m in n.moves}) < len(n.moves) for n in policy.nodes)
+    bt.answers_of(problem, policy)  # walks every node with the move the policy meant
+    text = bt.to_btcpp(bt.from_policy(policy, bt.answers_of(problem, policy)))
+    assert xml_shape(text) == policy_shape(policy)
