@@ -385,5 +385,9 @@ def test_answers_follow_moves_that_share_a_label() -> None:
     problem, policy = solved(ROOT / "tests" / "data" / "cubes-8.toml")
     assert any(len({m.action for m in n.moves}) < len(n.moves) for n in policy.nodes)
     bt.answers_of(problem, policy)  # walks every node with the move the policy meant
-    text = bt.to_btcpp(bt.from_policy(policy, bt.answers_of(problem, policy)))
-    assert xml_shape(text) == policy_shape(policy)
+    forest = bt.from_policy(policy, bt.answers_of(problem, policy))
+    assert xml_shape(bt.to_btcpp(forest)) == policy_shape(policy)
+    # the py_trees module: one function per human choice keeps the nesting shallow
+    source = bt.to_py_trees_source(forest)
+    compile(source, "cubes8_tree.py", "exec")
+    assert max(len(x) - len(x.lstrip()) for x in source.splitlines()) <= 40

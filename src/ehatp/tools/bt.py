@@ -92,13 +92,15 @@ CUSTOM_IDS = frozenset(c[1] for c in CUSTOM_NODES)
 @dataclass
 class BTNode:
     """One node of the tree: its BehaviorTree.CPP tag (node ID) and ports, in writing order.
-    ``completes`` (not written to XML) is the label of the robot's policy move that this node
-    finishes: the last node of each robot move."""
+    Not written to XML: ``completes``, the label of the robot's policy move that this node
+    finishes (the last node of each robot move), and ``node``, the policy node of a human
+    choice's ``Fallback``."""
 
     tag: str
     attrs: dict[str, str] = field(default_factory=dict)
     children: list[BTNode] = field(default_factory=list)
     completes: str | None = None
+    node: int | None = None
 
 
 @dataclass
@@ -173,7 +175,8 @@ def from_policy(policy: Policy, answers: dict[tuple[int, str], bool] | None = No
                 BTNode("AlwaysFailure")]))
             who = node.to_move or node.moves[0].agent
             out.append(BTNode("WaitHumanAction", {"action": key, "expected": expected}))
-            out.append(BTNode("Fallback", {"name": f"{who}'s choice at node {n}"}, branches))
+            out.append(BTNode("Fallback", {"name": f"{who}'s choice at node {n}"}, branches,
+                              node=n))
             return out
 
     trees = {MAIN_TREE: BTNode("Sequence", {"name": "node 0"}, chain(0, 0))}
@@ -313,15 +316,21 @@ def _py(v: str) -> str:
     return repr(v)
 
 
-def _expr(node: BTNode, depth: int, out: list[str]) -> None:
-    """Append the py_trees expression of ``node`` (one call per line, nested by indent)."""
+def _expr(node: BTNode, depth: int, out: list[str], choices: list[BTNode] | None = None) -> None:
+    """Append the py_trees expression of ``node`` (one call per line, nested by indent). A
+    human choice is a call of its own function (``choice_N()``), added to ``choices`` to be
+    written apart, so that nesting stays shallow however deep the policy."""
     pad = "    " * depth
     a = node.attrs
+    if node.tag == "Fallback" and choices is not None and node.node is not None:
+        choices.append(node)
+        out.append(f"{pad}choice_{node.node}(),")
+        return
     if node.tag in ("Sequence", "Fallback"):
         cls = "Sequence" if node.tag == "Sequence" else "Selector"
         out.append(f"{pad}{cls}({_py(a.get('name', node.tag))}, memory=True, children=[")
         for c in node.children:
-            _expr(c, depth + 1, out)
+            _expr(c, depth + 1, out, choices)
         out.append(f"{pad}]),")
         return
     if node.tag == "SubTree":
@@ -359,17 +368,22 @@ def to_py_trees_source(forest: Forest) -> str:
            f'    """The tree of policy {p.problem!r}: robot {p.agents["robot"]}, human '
            f'{p.agents["human"]}, cost {p.cost}."""',
            "    io = Interface(robot, human, on_goal, on_uncovered)"]
-    for tid, root in forest.trees.items():
-        if tid == forest.main:
-            continue
-        out += ["", f"    def {tid.lower()}() -> Behaviour:", "        return ("]
-        _expr(root, 3, out)
+
+    def function(name: str, root: BTNode) -> None:
+        # a choice written inside this one gets its function after it (a queue: the order
+        # is that of the policy, and every name is defined before make_tree returns)
+        choices: list[BTNode] = []
+        out.extend(["", f"    def {name}() -> Behaviour:", "        return ("])
+        _expr(root, 3, out, choices)
         out[-1] = out[-1].rstrip(",")
         out.append("        )")
-    out += ["", "    return ("]
-    _expr(forest.trees[forest.main], 2, out)
-    out[-1] = out[-1].rstrip(",")
-    out.append("    )")
+        for c in choices:
+            # the choice's own Selector, its branches' choices deferred in turn
+            function(f"choice_{c.node}", BTNode("Fallback", c.attrs, c.children))
+
+    for tid, root in forest.trees.items():
+        function(tid.lower(), root)
+    out += ["", f"    return {forest.main.lower()}()"]
     return "\n".join(out) + "\n"
 
 

@@ -237,7 +237,9 @@ def build(forest: Forest, io: Interface) -> Behaviour:
 
     def make(node: BTNode) -> Behaviour:
         a = node.attrs
-        kids = [make(c) for c in node.children] if node.tag != "SubTree" else []
+        kids: list[Behaviour] = []
+        for c in node.children:  # a loop, not a comprehension: one frame less per level
+            kids.append(make(c))
         if node.tag == "Sequence":
             return Sequence(a.get("name", "Sequence"), memory=True, children=kids)
         if node.tag == "Fallback":
