@@ -29,7 +29,7 @@ from fractions import Fraction
 from typing import TypeVar
 
 from ..model.formula import And, Formula, StateFn, negate
-from ..model.grounding import FINISH, GModel, GOp, Grounded, ground_problem
+from ..model.grounding import FINISH, GMethod, GModel, GOp, Grounded, ground_problem
 from ..model.options import InformWhere, ObjectiveKind, Passes, Relevance, Speech
 from ..model.problem import Problem
 from ..policy_format import Policy, PolicyMove, PolicyNode
@@ -39,7 +39,23 @@ ACTION, WAIT, PASS, INFORM, ASK = "action", "wait", "pass", "inform", "ask"
 SILENCE = "silence"  # the robot's silent move at a speech opening (section 5)
 BLOCKED = -2  # the end of a human plan where no action applies (relevance "plan", section 5)
 
-Agenda = tuple[int, ...]
+
+@dataclass(frozen=True)
+class Block:
+    """A partially ordered part of an agenda (section 1, "Partial order"): its tasks, and the
+    pairs (i, j) of positions where task i comes before task j (transitively closed). Built
+    only by :meth:`_Semantics.canon`, so equal task networks are equal blocks."""
+
+    tasks: tuple[int, ...]
+    before: frozenset[tuple[int, int]]
+
+    def ready(self) -> list[int]:
+        """The positions of the tasks no other task of the block comes before."""
+        later = {j for _, j in self.before}
+        return [i for i in range(len(self.tasks)) if i not in later]
+
+
+Agenda = tuple["int | Block", ...]
 World = tuple[int, Agenda]  # (state, robot agenda the human attributes to the robot)
 Worlds = frozenset[World]
 _T = TypeVar("_T")
@@ -184,6 +200,21 @@ class _Semantics:
                 out.append((FINISH, ()))
                 return
             t, rest = ag[0], ag[1:]
+            if isinstance(t, Block):
+                # §1 (Partial order): ready tasks that are done are removed first
+                for i in t.ready():
+                    done = self.done_of(model, t.tasks[i])
+                    if done is not None and done[1](s):
+                        go(self.drop(t, i) + rest, depth + 1)
+                        return
+                # then each ready task is refined in its place
+                for i in t.ready():
+                    for a, r in self.refine(model, (t.tasks[i],), s):
+                        if a == FINISH:
+                            go(self.drop(t, i) + rest, depth + 1)
+                        else:
+                            out.append((a, self.put(t, i, r) + rest))
+                return
             op = model.ops.get(t)
             done = self.done_of(model, t)
             if done is not None and done[1](s):
@@ -195,14 +226,16 @@ class _Semantics:
                 return
             for m in model.methods.get(t, ()):
                 if m.pre(s):
-                    go(m.subtasks + rest, depth + 1)
+                    go(self.subtasks(m) + rest, depth + 1)
 
         go(agenda, 0)
         return _dedupe(out)
 
-    def hrefine(self, agenda: Agenda, states: frozenset[int]) -> list[HResult]:
+    def hrefine(self, agenda: Agenda, states: frozenset[int],
+                conds0: tuple[Formula, ...] = ()) -> list[HResult]:
         """§1: the human's refinement over a set of world states: a condition holding in some
-        worlds only goes on in those worlds and is recorded as uncertain."""
+        worlds only goes on in those worlds and is recorded as uncertain (``conds0``: the
+        conditions already found uncertain before ``agenda``)."""
         model = self.g.human
         out: list[HResult] = []
 
@@ -213,6 +246,28 @@ class _Semantics:
                 out.append(HResult(FINISH, (), ws, conds))
                 return
             t, rest = ag[0], ag[1:]
+            if isinstance(t, Block):
+                # §1 (Partial order): a ready task done in some worlds is removed in those
+                for i in t.ready():
+                    done = self.done_of(model, t.tasks[i])
+                    if done is None:
+                        continue
+                    df, dfn = done
+                    yes = frozenset(s for s in ws if dfn(s))
+                    if yes == ws:
+                        go(self.drop(t, i) + rest, ws, conds, depth + 1)
+                        return
+                    if yes:
+                        go(self.drop(t, i) + rest, yes, (*conds, df), depth + 1)
+                        ws, conds = ws - yes, (*conds, negate(df))
+                for i in t.ready():
+                    for r in self.hrefine((t.tasks[i],), ws, conds):
+                        if r.action == FINISH:
+                            go(self.drop(t, i) + rest, r.states, r.conds, depth + 1)
+                        else:
+                            out.append(HResult(r.action, self.put(t, i, r.rest) + rest,
+                                               r.states, r.conds))
+                return
             op = model.ops.get(t)
             done = self.done_of(model, t)
             if done is not None:
@@ -232,10 +287,153 @@ class _Semantics:
             for m in model.methods.get(t, ()):
                 ok = frozenset(s for s in ws if m.pre(s))
                 if ok:
-                    go(m.subtasks + rest, ok, conds if ok == ws else (*conds, m.pre_f), depth + 1)
+                    go(self.subtasks(m) + rest, ok, conds if ok == ws else (*conds, m.pre_f),
+                       depth + 1)
 
-        go(agenda, states, (), 0)
+        go(agenda, states, conds0, 0)
         return _dedupe(out)
+
+    # -- section 1: partial order --------------------------------------------------------------
+
+    def subtasks(self, m: GMethod) -> Agenda:
+        """§1: a method's subtasks as an agenda: as listed, or (partially ordered) in canonical
+        form."""
+        if m.order is None:
+            return m.subtasks
+        pairs = {(i, j) for j, preds in enumerate(m.order) for i in _bits(preds)}
+        return self.canon(list(m.subtasks), pairs)
+
+    def canon(self, tasks: Sequence[int], before: set[tuple[int, int]]) -> Agenda:
+        """§1 (Partial order): the tasks ``tasks`` under the order ``before`` (pairs of
+        positions, transitively closed) as an agenda in canonical form: cut into parts, each
+        wholly before the next, as small as possible; a part of one task is that task, a larger
+        one a block, its tasks listed by name, then by the names of the tasks before them
+        (ties keep their order)."""
+        out: list[int | Block] = []
+        left = list(range(len(tasks)))
+        while left:
+            # the first part holds a task nothing precedes, and with any task in it every task
+            # that does not come after it
+            x = next(i for i in left if not any((j, i) in before for j in left))
+            part = {x}
+            todo = [x]
+            while todo:
+                y = todo.pop()
+                for z in left:
+                    if z not in part and (y, z) not in before:
+                        part.add(z)
+                        todo.append(z)
+            keep = [i for i in left if i in part]
+            if len(keep) == 1:
+                out.append(tasks[keep[0]])
+            else:
+                names = self.g.task_names
+                keys = {i: (names[tasks[i]], sorted(names[tasks[j]] for j in keep
+                                                    if (j, i) in before)) for i in keep}
+                order = sorted(keep, key=keys.__getitem__)
+                pos = {i: k for k, i in enumerate(order)}
+                out.append(Block(tuple(tasks[i] for i in order),
+                                 frozenset((pos[i], pos[j]) for i, j in before
+                                           if i in pos and j in pos)))
+            left = [i for i in left if i not in part]
+        return tuple(out)
+
+    def drop(self, b: Block, i: int) -> Agenda:
+        """§1: the block once its task at position ``i`` is done."""
+        def at(p: int) -> int:
+            return p if p < i else p - 1
+
+        return self.canon([t for p, t in enumerate(b.tasks) if p != i],
+                          {(at(x), at(y)) for x, y in b.before if i not in (x, y)})
+
+    def put(self, b: Block, i: int, rest: Agenda) -> Agenda:
+        """§1: the block once its task at position ``i`` is refined into ``rest``: the tasks of
+        ``rest`` (in its order, a block's in the block's) take its place, keep their own order,
+        come after what came before it and before what came after it."""
+        new: list[int] = []
+        inner: set[tuple[int, int]] = set()
+        for it in rest:
+            base = len(new)
+            if isinstance(it, Block):
+                new.extend(it.tasks)
+                inner |= {(base + x, base + y) for x, y in it.before}
+            else:
+                new.append(it)
+            inner |= {(p, q) for p in range(base) for q in range(base, len(new))}
+        n = len(new)
+
+        def at(p: int) -> int:
+            return p if p < i else p + n - 1
+
+        pairs = {(i + x, i + y) for x, y in inner}
+        for x, y in b.before:
+            if x == i:
+                pairs |= {(i + k, at(y)) for k in range(n)}
+            elif y == i:
+                pairs |= {(at(x), i + k) for k in range(n)}
+            else:
+                pairs.add((at(x), at(y)))
+        tasks = [*b.tasks[:i], *new, *b.tasks[i + 1:]]
+        return self.canon(tasks, pairs)
+
+    def shown(self, agenda: Agenda) -> list[str]:
+        """An agenda as the policy file writes it: tasks by name, a block in words (§1)."""
+        return [self.block_text(t) if isinstance(t, Block) else self.g.task_names[t]
+                for t in agenda]
+
+    def block_text(self, b: Block) -> str:
+        """§1: ``{x | y}`` for tasks in any order, ``x < y`` for one before the other, nested;
+        an order that is neither as ``{a | b | c | d; a < c, b < c, b < d}``."""
+        names = self.g.task_names
+
+        def linked(i: int, j: int) -> bool:
+            return (i, j) in b.before or (j, i) in b.before
+
+        def par(ps: list[int]) -> str:
+            groups: list[list[int]] = []
+            for p in ps:
+                if any(linked(p, q) for g in groups for q in g):
+                    touching = [g for g in groups if any(linked(p, q) for q in g)]
+                    merged = sorted([p, *(q for g in touching for q in g)])
+                    groups = [g for g in groups if g not in touching] + [merged]
+                else:
+                    groups.append([p])
+            groups.sort(key=lambda g: g[0])
+            if len(groups) == 1:
+                return ser(ps)
+            return "{" + " | ".join(ser(g) for g in groups) + "}"
+
+        def ser(ps: list[int]) -> str:
+            if len(ps) == 1:
+                return names[b.tasks[ps[0]]]
+            parts = [[p for p in ps if p in part] for part in self._cuts(b, ps)]
+            if len(parts) > 1:
+                return " < ".join(par(part) for part in parts)
+            pairs = [f"{names[b.tasks[p]]} < {names[b.tasks[q]]}" for p in ps for q in ps
+                     if (p, q) in b.before
+                     and not any((p, r) in b.before and (r, q) in b.before for r in ps)]
+            return "{" + " | ".join(names[b.tasks[p]] for p in ps) + "; " + ", ".join(pairs) + "}"
+
+        return par(list(range(len(b.tasks))))
+
+    @staticmethod
+    def _cuts(b: Block, ps: list[int]) -> list[set[int]]:
+        """The positions ``ps`` of ``b`` cut into parts each wholly before the next."""
+        out: list[set[int]] = []
+        left = list(ps)
+        while left:
+            x = next(i for i in left if not any((j, i) in b.before for j in left))
+            part = {x}
+            todo = [x]
+            while todo:
+                y = todo.pop()
+                for z in left:
+                    if z not in part and (y, z) not in b.before:
+                        part.add(z)
+                        todo.append(z)
+            out.append(part)
+            left = [i for i in left if i not in part]
+        return out
 
     # -- section 2: observation ----------------------------------------------------------------
 
@@ -267,7 +465,18 @@ class _Semantics:
         """The robot agenda as the human can hold it (section 4): the tasks its model of the
         robot knows; a task M_R^H has no operator, method or done-condition for is dropped."""
         m = self.g.robot_seen_by_human
-        return tuple(t for t in agenda if t in m.ops or t in m.methods or t in m.done)
+        out: list[int | Block] = []
+        for t in agenda:
+            if isinstance(t, Block):  # a block keeps the tasks M_R^H knows (section 1)
+                keep = [p for p, x in enumerate(t.tasks)
+                        if x in m.ops or x in m.methods or x in m.done]
+                at = {p: k for k, p in enumerate(keep)}
+                out.extend(self.canon([t.tasks[p] for p in keep],
+                                      {(at[x], at[y]) for x, y in t.before
+                                       if x in at and y in at}))
+            elif t in m.ops or t in m.methods or t in m.done:
+                out.append(t)
+        return tuple(out)
 
     def product(self, worlds: Worlds) -> Worlds:
         """§4: every world followed by the noop or a robot event the human anticipates there;
@@ -658,8 +867,7 @@ def _differences(a: EState, b: EState, sem: _Semantics) -> str:
         out.append("the true state T differs on " + ", ".join(g.mask_atoms(a.true ^ b.true)))
     for what, x, y in (("robot agenda", a.robot, b.robot), ("human agenda", a.human, b.human)):
         if x != y:
-            out.append(f"the {what} is {[g.task_names[t] for t in x]} then, "
-                       f"{[g.task_names[t] for t in y]} now")
+            out.append(f"the {what} is {sem.shown(x)} then, {sem.shown(y)} now")
     if a.worlds != b.worlds:
         out.append(f"the human's worlds differ ({len(a.worlds)} then, {len(b.worlds)} now)")
     for what, i, j in (("k", a.k, b.k), ("the passive count", a.passive, b.passive)):
@@ -768,7 +976,7 @@ class _Validator:
             return f"{label} is not an action of {self.name(ROBOT)}"
         if not op.pre(es.true):
             return f"{label} is not applicable in T (its precondition does not hold)"
-        agenda = [g.task_names[t] for t in es.robot]
+        agenda = sem.shown(es.robot)
         return f"{label} is not the first action of any refinement of the robot agenda " \
                f"{agenda} under T"
 
@@ -813,8 +1021,8 @@ class _Validator:
             missing = sorted(set(g.state_atoms(es.true)) - set(node.state))
             bad.append(f"state differs from the true state T (recorded but false: {extra}; "
                        f"true but not recorded: {missing})")
-        cmp("robot_agenda", list(node.robot_agenda), [g.task_names[t] for t in es.robot])
-        cmp("human_agenda", list(node.human_agenda), [g.task_names[t] for t in es.human])
+        cmp("robot_agenda", list(node.robot_agenda), sem.shown(es.robot))
+        cmp("human_agenda", list(node.human_agenda), sem.shown(es.human))
         cmp("copresent", node.copresent, sem.cop(es.true))
         cmp("k", node.k, es.k)
         cmp("worlds", node.worlds, len(es.worlds))
@@ -1113,7 +1321,6 @@ class _Validator:
 
     def robot_node(self, node: PolicyNode, es: EState, path: list[str],
                    where: str) -> list[tuple[int, Step]]:
-        g = self.sem.g
         if len(node.moves) != 1:
             self.fail(path, f"{where}: a robot node must have exactly one move (its child: "
                       f"an OR choice), it has {len(node.moves)}: "
@@ -1130,9 +1337,8 @@ class _Validator:
             self.end(node.id)
             return []
         # one action may arise from several refinements: the recorded agenda tells which
-        st = next((s for s in r if s.after is not None and [g.task_names[t] for t in
-                                                            s.after.robot] == child.robot_agenda),
-                  r[0])
+        st = next((s for s in r if s.after is not None
+                   and self.sem.shown(s.after.robot) == child.robot_agenda), r[0])
         if not self.check_move(node, 0, st, path):
             self.end(node.id)
             return []
@@ -1140,7 +1346,6 @@ class _Validator:
 
     def human_node(self, node: PolicyNode, es: EState, path: list[str],
                    where: str) -> list[tuple[int, Step]]:
-        g = self.sem.g
         options = self.sem.human_options(es)
         used: list[Step] = []
         out: list[tuple[int, Step]] = []
@@ -1155,7 +1360,7 @@ class _Validator:
                 self.end(node.id)
                 continue
             st = next((m for m in matches if m.after is not None
-                       and [g.task_names[t] for t in m.after.human] == child.human_agenda
+                       and self.sem.shown(m.after.human) == child.human_agenda
                        and m not in used), None)
             if st is None:
                 st = next((m for m in matches if m not in used), matches[0])

@@ -15,7 +15,7 @@ from typing import NamedTuple
 
 from ..model.formula import And, Formula, conj, ground_atoms
 from ..model.grounding import FINISH, GOp, Grounded
-from ..model.htn import Agenda, Refiner
+from ..model.htn import Agenda, Networks, Refiner
 from ..model.options import InformWhere, Passes, Relevance, Speech
 from ..model.problem import Cost
 from .state import HUMAN, ROBOT, EState, World, Worlds, normalize, states_of
@@ -76,10 +76,12 @@ class Semantics:
         self.comm = p.communication
         self._plans: dict[tuple[Agenda, int, int], frozenset[tuple[int, ...]]] = {}
         self.names = (p.domain.robot_name, p.domain.human_name)
-        self.R = Refiner(g.robot, g.task_names)
-        self.H = Refiner(g.human, g.task_names)
+        limit = p.limits.max_decomposition
+        self.net = Networks(g.task_names)  # partially ordered agendas (§1), shared
+        self.R = Refiner(g.robot, g.task_names, limit, self.net)
+        self.H = Refiner(g.human, g.task_names, limit, self.net)
         self.RH = (self.R if g.robot_seen_by_human is g.robot
-                   else Refiner(g.robot_seen_by_human, g.task_names))
+                   else Refiner(g.robot_seen_by_human, g.task_names, limit, self.net))
         self._vis: dict[int, int] = {}
         self._cop: dict[int, bool] = {}
         self._succ: dict[World, tuple[World, ...]] = {}
@@ -195,7 +197,7 @@ class Semantics:
         m = self.g.robot_seen_by_human
         if m is self.g.robot:
             return agenda
-        return tuple(t for t in agenda if t in m.ops or t in m.methods or t in m.done)
+        return self.net.keep(agenda, lambda t: t in m.ops or t in m.methods or t in m.done)
 
     def successors(self, w: World) -> tuple[World, ...]:
         """The world itself (noop) and every event the human anticipates of the robot there."""

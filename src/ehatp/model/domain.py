@@ -199,6 +199,28 @@ class Method:
     params: tuple[Var, ...]
     pre: Formula
     subtasks: tuple[TaskRef, ...]
+    # pairs (i, j): subtask i comes before subtask j; None: the subtasks in the order listed
+    order: tuple[tuple[int, int], ...] | None = None
+
+    def predecessors(self) -> tuple[int, ...] | None:
+        """For a partially ordered method, each subtask's predecessors as a bitmask over the
+        subtasks, transitively closed (docs/semantics.md §1); None when totally ordered."""
+        if self.order is None:
+            return None
+        preds = [0] * len(self.subtasks)
+        for i, j in self.order:
+            preds[j] |= 1 << i
+        changed = True
+        while changed:
+            changed = False
+            for j, m in enumerate(preds):
+                closed = m
+                for i in range(len(preds)):
+                    if m >> i & 1:
+                        closed |= preds[i]
+                if closed != m:
+                    preds[j], changed = closed, True
+        return tuple(preds)
 
 
 @dataclass(eq=False)
@@ -255,9 +277,13 @@ class AgentModel:
         params: Sequence[Var] = (),
         pre: Formula = TRUE,
         subtasks: Sequence[TaskRef] = (),
+        order: Iterable[tuple[int, int]] | None = None,
     ) -> Method:
         """A way to decompose ``task``; ``params`` beyond the task's are chosen freely (one
-        alternative per binding satisfying ``pre``)."""
+        alternative per binding satisfying ``pre``). The subtasks are done in the order listed,
+        unless ``order`` gives the order between them as pairs of indices ``(before,
+        after)``: ``order=[(0, 2), (1, 2)]`` does the first two in either order, then the third;
+        ``order=[]`` leaves them unordered (docs/semantics.md §1, "Partial order")."""
         if self.tasks.get(task.name) is not task:
             raise DomainError(f"{self.agent}: method {name} refines {task.name}, not a task here")
         scope = set(task.params) | set(params)
@@ -267,7 +293,9 @@ class AgentModel:
             if loose:
                 raise DomainError(f"method {task.name}.{name}: subtask {st} uses unbound "
                                   f"{', '.join(sorted(v.name for v in loose))}")
-        m = Method(task, name, tuple(params), pre, tuple(subtasks))
+        pairs = None if order is None else _order_pairs(f"method {task.name}.{name}", order,
+                                                         len(subtasks))
+        m = Method(task, name, tuple(params), pre, tuple(subtasks), pairs)
         self.methods.append(m)
         return m
 
@@ -275,6 +303,37 @@ class AgentModel:
         """A shallow copy, e.g. to start the human's estimate of the robot's model."""
         return AgentModel(agent or self.agent, dict(self.operators), dict(self.tasks),
                           list(self.methods))
+
+
+def _order_pairs(where: str, order: Iterable[tuple[int, int]],
+                 n: int) -> tuple[tuple[int, int], ...]:
+    """A method's ``order``, checked (indices of its subtasks, no cycle) and sorted."""
+    pairs: set[tuple[int, int]] = set()
+    for p in order:
+        if (not isinstance(p, tuple | list) or len(p) != 2
+                or not all(isinstance(x, int) and not isinstance(x, bool) for x in p)):
+            raise DomainError(f"{where}: order {p!r} is not a pair of subtask indices "
+                              "(before, after)")
+        i, j = p
+        if not (0 <= i < n and 0 <= j < n):
+            raise DomainError(f"{where}: order ({i}, {j}) names a subtask it does not have "
+                              f"(indices 0..{n - 1})")
+        if i == j:
+            raise DomainError(f"{where}: order ({i}, {j}) puts a subtask before itself")
+        pairs.add((i, j))
+    after: dict[int, set[int]] = {}
+    for i, j in pairs:
+        after.setdefault(i, set()).add(j)
+    for start in range(n):  # a cycle would leave no subtask able to come first
+        seen, todo = set(), list(after.get(start, ()))
+        while todo:
+            k = todo.pop()
+            if k == start:
+                raise DomainError(f"{where}: order has a cycle through subtask {start}")
+            if k not in seen:
+                seen.add(k)
+                todo.extend(after.get(k, ()))
+    return tuple(sorted(pairs))
 
 
 def _check_scope(where: str, scope: set[Var], formulas: Iterable[Formula]) -> None:

@@ -65,6 +65,9 @@ class GMethod:
     pre_f: Formula
     pre: StateFn
     subtasks: tuple[int, ...]
+    # partial order: each subtask's predecessors (bitmask over subtasks, transitively closed);
+    # None: the subtasks in the order listed (docs/semantics.md §1)
+    order: tuple[int, ...] | None = None
 
 
 @dataclass(eq=False)
@@ -363,7 +366,7 @@ class _Grounder:
                         todo.append(sid)
                     label = f"{m.name}({', '.join(vals)})" if vals else m.name
                     gms.append(GMethod(f"{name}.{label}", pre_f, self.compile(pre_f),
-                                       tuple(subs)))
+                                       tuple(subs), m.predecessors()))
             g.methods[t] = tuple(gms)
         return g
 

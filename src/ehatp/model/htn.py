@@ -1,32 +1,288 @@
-"""HTN refinement of totally ordered agendas over ground models.
+"""HTN refinement of agendas over ground models (docs/semantics.md §1).
 
 ``refine`` answers, for one state: which first primitive actions can the agent do next, and
 with what remaining agenda? ``refine_in_all`` answers the same from the human's perspective over
 a set of worlds: a condition (method precondition, done-condition, action precondition) that
 holds in some worlds but not all makes that refinement *uncertain*, and the conditions that were
 uncertain along the way are returned so the human can ask about them.
+
+An agenda is a tuple of items done in order. An item is a task id (an ``int``) or, for the
+subtasks of a partially ordered method, a :class:`Block`: a set of tasks with an order between
+some of them (§1, "Partial order"). A totally ordered agenda is a plain tuple of ints, exactly
+as before partial order existed, and refining it takes the same path.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable, Sequence
+
 from .domain import DomainError
-from .formula import Formula, negate
+from .formula import Formula, StateFn, negate
 from .grounding import FINISH, GModel
 
-Agenda = tuple[int, ...]
-Option = tuple[int, Agenda]  # (ground action id or FINISH, remaining agenda)
-
 MAX_DECOMPOSITION = 64
+"""Default of ``[limits] max_decomposition``: nested method applications allowed before the
+first action of a refinement (a task decomposing without end is a DomainError)."""
+
+
+class Block(tuple[tuple[int, int], ...]):
+    """A partially ordered part of an agenda (docs/semantics.md §1, "Partial order").
+
+    Its members are ``(task id, predecessors)`` pairs; ``predecessors`` is a bitmask over the
+    block's own members (bit ``j``: member ``j`` comes first), transitively closed. A member is
+    *ready* when it has no predecessor left. The form is canonical (see
+    :meth:`Networks.normal`): no member is empty, the block cannot be cut in two parts one
+    wholly before the other, and members are listed by task name. Blocks compare after every
+    task id, so agendas mixing both still sort (worlds and options are kept sorted)."""
+
+    __slots__ = ()
+
+    def __lt__(self, other: object) -> bool:
+        if isinstance(other, int):
+            return False
+        return tuple.__lt__(self, other)  # type: ignore[operator]
+
+    def __le__(self, other: object) -> bool:
+        if isinstance(other, int):
+            return False
+        return tuple.__le__(self, other)  # type: ignore[operator]
+
+    def __gt__(self, other: object) -> bool:
+        if isinstance(other, int):
+            return True
+        return tuple.__gt__(self, other)  # type: ignore[operator]
+
+    def __ge__(self, other: object) -> bool:
+        if isinstance(other, int):
+            return True
+        return tuple.__ge__(self, other)  # type: ignore[operator]
+
+
+Item = int | Block
+Agenda = tuple[Item, ...]
+Option = tuple[int, Agenda]  # (ground action id or FINISH, remaining agenda)
+Members = list[tuple[int, int]]  # (task id, predecessor mask over the list's positions)
+
+
+def _drop_bit(m: int, i: int) -> int:
+    """``m`` without bit ``i``, the bits above it moved down by one."""
+    return (m & ((1 << i) - 1)) | ((m >> (i + 1)) << i)
+
+
+def _bits(m: int) -> Iterable[int]:
+    i = 0
+    while m:
+        if m & 1:
+            yield i
+        m >>= 1
+        i += 1
+
+
+def _series(ms: Sequence[tuple[int, int]], ids: list[int]) -> list[list[int]]:
+    """§1: ``ids`` cut into consecutive parts, each wholly before the next, as finely as
+    possible (every part then cannot be cut again). Each part keeps ``ids``' order."""
+    parts: list[list[int]] = []
+    left = ids
+    while left:
+        inside = 0
+        for i in left:
+            inside |= 1 << i
+        # a part that comes first has fewer predecessors than anything after it
+        by_preds = sorted(left, key=lambda i: (ms[i][1] & inside).bit_count())
+        first = 0
+        cut = len(left)
+        for k in range(1, len(left)):
+            first |= 1 << by_preds[k - 1]
+            if all(ms[j][1] & first == first for j in by_preds[k:]):
+                cut = k
+                break
+        part = set(by_preds[:cut])
+        parts.append([i for i in left if i in part])
+        left = [i for i in left if i not in part]
+    return parts
+
+
+class Networks:
+    """Canonical forms and printing of partially ordered agendas, for one list of task names
+    (§1, "Partial order"). Memoised: the same block changes the same way in every state."""
+
+    def __init__(self, task_names: Sequence[str]) -> None:
+        self.names = task_names
+        self._without: dict[tuple[Block, int], Agenda] = {}
+        self._with: dict[tuple[Block, int, Agenda], Agenda] = {}
+        self._text: dict[Block, str] = {}
+
+    # -- canonical form -----------------------------------------------------------------------
+    def normal(self, ms: Members) -> Agenda:
+        """§1: the agenda of the tasks ``ms`` (predecessor masks transitively closed): cut into
+        parts each wholly before the next; a part of one task is that task, a larger part a
+        :class:`Block` whose members are sorted by task name (then by their predecessors'
+        names; full ties keep their order in ``ms``)."""
+        if len(ms) == 1:
+            return (ms[0][0],)
+        out: list[Item] = []
+        for part in _series(ms, list(range(len(ms)))):
+            out.append(ms[part[0]][0] if len(part) == 1 else self._block(ms, part))
+        return tuple(out)
+
+    def _block(self, ms: Members, ids: list[int]) -> Block:
+        names = self.names
+        inside = set(ids)
+
+        def key(i: int) -> tuple[str, list[str]]:
+            return names[ms[i][0]], sorted(names[ms[j][0]] for j in _bits(ms[i][1])
+                                           if j in inside)
+
+        order = sorted(ids, key=key)
+        pos = {i: k for k, i in enumerate(order)}
+        return Block(tuple((ms[i][0], sum(1 << pos[j] for j in _bits(ms[i][1]) if j in pos))
+                           for i in order))
+
+    def body(self, subtasks: tuple[int, ...], order: tuple[int, ...] | None) -> Agenda:
+        """A method's subtasks as an agenda: as listed (``order`` None: totally ordered), or
+        in canonical form under the closed predecessor masks ``order``."""
+        if order is None or not subtasks:
+            return subtasks
+        return self.normal(list(zip(subtasks, order, strict=True)))
+
+    def without(self, b: Block, i: int) -> Agenda:
+        """§1: the block once member ``i`` is done (canonical form)."""
+        key = (b, i)
+        r = self._without.get(key)
+        if r is None:
+            ms = [(t, _drop_bit(m, i)) for j, (t, m) in enumerate(b) if j != i]
+            r = self._without[key] = self.normal(ms)
+        return r
+
+    def replace(self, b: Block, i: int, rest: Agenda) -> Agenda:
+        """§1: the block once member ``i`` is refined into the agenda ``rest``: its tasks take
+        the member's place, keep their own order and the member's predecessors, and come before
+        the member's successors (canonical form)."""
+        if not rest:
+            return self.without(b, i)
+        key = (b, i, rest)
+        r = self._with.get(key)
+        if r is None:
+            new: Members = []
+            before = 0
+            for it in rest:  # the items of rest in sequence, blocks opened
+                if isinstance(it, Block):
+                    base = len(new)
+                    for t, m in it:
+                        new.append((t, before | (m << base)))
+                    before |= ((1 << len(it)) - 1) << base
+                else:
+                    new.append((it, before))
+                    before |= 1 << (len(new) - 1)
+            k = len(new)
+            span = ((1 << k) - 1) << i
+
+            def moved(m: int) -> int:
+                low = m & ((1 << i) - 1)
+                high = (m >> (i + 1)) << (i + k)
+                return low | high | (span if m >> i & 1 else 0)
+
+            own = moved(b[i][1])
+            ms: Members = [(t, moved(m)) for t, m in b[:i]]
+            ms += [(t, (m << i) | own) for t, m in new]
+            ms += [(t, moved(m)) for t, m in b[i + 1:]]
+            r = self._with[key] = self.normal(ms)
+        return r
+
+    def keep(self, agenda: Agenda, known: Callable[[int], bool]) -> Agenda:
+        """The agenda without the tasks ``known`` rejects, blocks included (canonical form)."""
+        out: list[Item] = []
+        for it in agenda:
+            if not isinstance(it, Block):
+                if known(it):
+                    out.append(it)
+                continue
+            ms: Members = list(it)
+            for j in range(len(ms) - 1, -1, -1):
+                if not known(ms[j][0]):
+                    del ms[j]
+                    ms = [(t, _drop_bit(m, j)) for t, m in ms]
+            if ms:
+                out.extend(self.normal(ms))
+        return tuple(out)
+
+    # -- printing -----------------------------------------------------------------------------
+    def names_of(self, agenda: Agenda) -> list[str]:
+        """The agenda as policies print it (docs/policy-format.md): a task by its name, a block
+        as ``{a(x) | b(x) < c}`` (§1, "Partial order")."""
+        out: list[str] = []
+        for it in agenda:
+            if isinstance(it, Block):
+                out.append(self.text(it))
+            elif it != FINISH:
+                out.append(self.names[it])
+        return out
+
+    def text(self, b: Block) -> str:
+        """§1: a block in words: ``{x | y}`` for tasks in any order, ``x < y`` for one before
+        the other, nested as needed; an order that is neither (an N shape) as
+        ``{a | b | c | d; a < c, b < c, b < d}``, listing the pairs that no third task links."""
+        r = self._text.get(b)
+        if r is None:
+            r = self._text[b] = self._par(b, list(range(len(b))))
+        return r
+
+    def _par(self, b: Block, ids: list[int]) -> str:
+        comps: list[list[int]] = []
+        for i in ids:  # members linked by the order, in the block's order
+            linked = [c for c in comps if any(b[i][1] >> j & 1 or b[j][1] >> i & 1 for j in c)]
+            merged = [i]
+            for c in linked:
+                merged += c
+                comps.remove(c)
+            comps.append(sorted(merged))
+        comps.sort()
+        if len(comps) == 1:
+            return self._ser(b, ids)
+        return "{" + " | ".join(self._ser(b, c) for c in comps) + "}"
+
+    def _ser(self, b: Block, ids: list[int]) -> str:
+        if len(ids) == 1:
+            return self.names[b[ids[0]][0]]
+        parts = _series(b, ids)
+        if len(parts) > 1:
+            return " < ".join(self._par(b, p) for p in parts)
+        pairs = [f"{self.names[b[i][0]]} < {self.names[b[j][0]]}" for i in ids for j in ids
+                 if b[j][1] >> i & 1 and not any(b[k][1] >> i & 1 and b[j][1] >> k & 1
+                                                 for k in ids)]
+        return ("{" + " | ".join(self.names[b[i][0]] for i in ids) + "; " + ", ".join(pairs)
+                + "}")
 
 
 class Refiner:
     """Refinement with memoisation: results depend only on (agenda, state(s))."""
 
-    def __init__(self, model: GModel, task_names: list[str]) -> None:
+    def __init__(self, model: GModel, task_names: list[str],
+                 max_decomposition: int = MAX_DECOMPOSITION,
+                 networks: Networks | None = None) -> None:
         self.model = model
         self.task_names = task_names
+        self.limit = max_decomposition
+        self.net = networks or Networks(task_names)
         self._one: dict[tuple[Agenda, int], tuple[Option, ...]] = {}
         self._all: dict[tuple[Agenda, tuple[int, ...]], tuple[Uncertain, ...]] = {}
+        # the subtasks of each method as an agenda (partially ordered ones in canonical form)
+        self._bodies: dict[int, tuple[tuple[StateFn, Formula, Agenda], ...]] = {
+            t: tuple((me.pre, me.pre_f, self.net.body(me.subtasks, me.order)) for me in ms)
+            for t, ms in model.methods.items()}
+
+    def _endless(self, t: Item) -> DomainError:
+        what = self.task_names[t] if isinstance(t, int) else self.net.text(t)
+        return DomainError(f"task {what} decomposes without end (more than {self.limit} "
+                           "nested methods; raise [limits] max_decomposition if that is "
+                           "expected)")
+
+    def _done_of(self, t: int) -> tuple[Formula, StateFn] | None:
+        """§1: the done-condition of task ``t``: its operator's, or its abstract task's."""
+        op = self.model.ops.get(t)
+        if op is not None:
+            return (op.done_f, op.done) if op.done is not None and op.done_f is not None else None
+        return self.model.done.get(t)
 
     def refine(self, agenda: Agenda, s: int) -> tuple[Option, ...]:
         """§1 (Refinement): the (first primitive action, remaining agenda) pairs of ``agenda``
@@ -47,6 +303,9 @@ class Refiner:
                 out.add((FINISH, ()))
                 return
             t = agenda[0]
+            if isinstance(t, Block):
+                self._go_block(t, agenda[1:], s, out, depth)
+                return
             op = m.ops.get(t)
             if op is not None:
                 if op.done is not None and op.done(s):
@@ -60,14 +319,36 @@ class Refiner:
                 agenda = agenda[1:]
                 continue
             break
-        if depth > MAX_DECOMPOSITION:
-            raise DomainError(f"task {self.task_names[t]} decomposes without end "
-                              f"(more than {MAX_DECOMPOSITION} nested methods)")
+        if depth > self.limit:
+            raise self._endless(t)
         rest = agenda[1:]
         # a task this model does not know gives nothing: the agent is blocked on it
-        for meth in m.methods.get(t, ()):
-            if meth.pre(s):
-                self._go(meth.subtasks + rest, s, out, depth + 1)
+        for pre, _, body in self._bodies.get(t, ()):
+            if pre(s):
+                self._go(body + rest, s, out, depth + 1)
+
+    def _go_block(self, b: Block, rest: Agenda, s: int, out: set[Option], depth: int) -> None:
+        """§1 (Partial order): a ready member that is done is skipped first; then every ready
+        member is refined in place (its first action, the block with what is left of it)."""
+        net = self.net
+        for i, (t, preds) in enumerate(b):
+            if not preds:
+                d = self._done_of(t)
+                if d is not None and d[1](s):
+                    self._go(net.without(b, i) + rest, s, out, depth)
+                    return
+        if depth > self.limit:
+            raise self._endless(b)
+        for i, (t, preds) in enumerate(b):
+            if preds:
+                continue
+            sub: set[Option] = set()
+            self._go((t,), s, sub, depth + 1)
+            for a, r in sub:
+                if a == FINISH:  # the member finished without an action: go on with the rest
+                    self._go(net.without(b, i) + rest, s, out, depth + 1)
+                else:
+                    out.add((a, net.replace(b, i, r) + rest))
 
     def refine_in_all(self, agenda: Agenda, states: tuple[int, ...]) -> tuple[Uncertain, ...]:
         """§1 (the human's perspective): refinements over ``states`` (sorted, distinct), each
@@ -94,6 +375,9 @@ class Refiner:
             return
         t = agenda[0]
         rest = agenda[1:]
+        if isinstance(t, Block):
+            self._go_all_block(t, rest, states, ws, conds, out, depth)
+            return
         op = m.ops.get(t)
         if op is not None:
             if op.done is not None and op.done_f is not None:
@@ -120,14 +404,49 @@ class Refiner:
                 return
             conds = _add(conds, negate(d[0]), dw != 0)
             ws = ws2
-        if depth > MAX_DECOMPOSITION:
-            raise DomainError(f"task {self.task_names[t]} decomposes without end "
-                              f"(more than {MAX_DECOMPOSITION} nested methods)")
-        for meth in m.methods.get(t, ()):
-            mw = _holds(meth.pre, states, ws)
+        if depth > self.limit:
+            raise self._endless(t)
+        for pre, pre_f, body in self._bodies.get(t, ()):
+            mw = _holds(pre, states, ws)
             if mw:
-                self._go_all(meth.subtasks + rest, states, mw,
-                             _add(conds, meth.pre_f, mw != ws), out, depth + 1)
+                self._go_all(body + rest, states, mw, _add(conds, pre_f, mw != ws), out,
+                             depth + 1)
+
+    def _go_all_block(self, b: Block, rest: Agenda, states: tuple[int, ...], ws: int,
+                      conds: tuple[Formula, ...],
+                      out: dict[tuple[int, Agenda, tuple[Formula, ...]], int],
+                      depth: int) -> None:
+        """§1 (Partial order, over worlds): a ready member done in some worlds is skipped in
+        those (the condition uncertain if not in all) and kept in the others; then every ready
+        member is refined in place."""
+        net = self.net
+        for i, (t, preds) in enumerate(b):
+            if preds:
+                continue
+            d = self._done_of(t)
+            if d is None:
+                continue
+            dw = _holds(d[1], states, ws)
+            if dw:
+                self._go_all(net.without(b, i) + rest, states, dw, _add(conds, d[0], dw != ws),
+                             out, depth)
+                ws &= ~dw
+                if not ws:
+                    return
+                conds = _add(conds, negate(d[0]), True)
+        if depth > self.limit:
+            raise self._endless(b)
+        for i, (t, preds) in enumerate(b):
+            if preds:
+                continue
+            sub: dict[tuple[int, Agenda, tuple[Formula, ...]], int] = {}
+            self._go_all((t,), states, ws, conds, sub, depth + 1)
+            for (a, r, c), w in sub.items():
+                if a == FINISH:
+                    self._go_all(net.without(b, i) + rest, states, w, c, out, depth + 1)
+                else:
+                    k = (a, net.replace(b, i, r) + rest, c)
+                    out[k] = out.get(k, 0) | w
 
 
 class Uncertain(tuple[int, Agenda, int, tuple[Formula, ...]]):

@@ -57,6 +57,8 @@ class Limits:
     max_states: int = 5_000_000
     max_depth: int = 400
     max_memory: int | None = None  # bytes of resident memory; [limits] max_memory = "2G"
+    # nested methods allowed before a refinement's first action (docs/semantics.md §1)
+    max_decomposition: int = 64
 
 
 @dataclass(frozen=True)
@@ -140,7 +142,8 @@ _TABLE_KEYS: dict[str, frozenset[str]] = {
     "beliefs.world": frozenset({"true", "false", "robot_agenda"}),
     "agenda": frozenset({"robot", "human"}),
     "costs": frozenset({"inform", "ask", "wait", "pass", "actions"}),
-    "limits": frozenset({"timeout", "max_states", "max_depth", "max_memory"}),
+    "limits": frozenset({"timeout", "max_states", "max_depth", "max_memory",
+                         "max_decomposition"}),
     **OPTION_KEYS,
 }
 _TOP_TABLES = {"problem", "domain", "objects", "init", "beliefs", "agenda", "costs", "limits",
@@ -449,6 +452,8 @@ def loads(text: str, path: str | Path, overrides: Mapping[str, Any] | None = Non
         max_depth=_int(r, "[limits] max_depth", l_t.get("max_depth", Limits.max_depth)),
         max_memory=_size(r, "[limits] max_memory", l_t["max_memory"])
         if "max_memory" in l_t else None,
+        max_decomposition=_int(r, "[limits] max_decomposition",
+                               l_t.get("max_decomposition", Limits.max_decomposition)),
     )
     human, communication, objective, notes = read_options(r, data)
     after = tuple(r.strings("[problem] after", prob.get("after", [])))

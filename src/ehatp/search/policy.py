@@ -8,7 +8,7 @@ from typing import Any
 
 from ..epistemic.semantics import ACTION, WAIT, Move, bits_of
 from ..epistemic.state import ROBOT, EState
-from ..model.grounding import FINISH
+from ..model.htn import Agenda
 from ..model.options import Objective, ObjectiveKind
 from ..model.problem import Cost
 from ..policy_format import Policy, PolicyMove, PolicyNode, num, topological_order
@@ -58,8 +58,8 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
         order.append(n)
         stack.extend(e.child for e in reversed(chosen(n)))
 
-    def agenda(ag: tuple[int, ...]) -> list[str]:
-        return [g.task_names[t] for t in ag if t != FINISH]
+    def agenda(ag: Agenda) -> list[str]:  # a partially ordered block as {a | b} (§1)
+        return sem.net.names_of(ag)
 
     def move_of(e: Edge, before: int) -> PolicyMove:
         move: Move = e.move

@@ -24,7 +24,8 @@ from ..epistemic.semantics import ACTION, ASK, INFORM, WAIT, Move, Semantics, bi
 from ..epistemic.state import HUMAN, ROBOT, EState, Worlds, states_of
 from ..errors import EhatpError
 from ..model.formula import conj
-from ..model.grounding import FINISH, Grounded, ground_problem
+from ..model.grounding import Grounded, ground_problem
+from ..model.htn import Agenda
 from ..model.problem import Cost, Problem
 from ..policy_format import Policy, PolicyNode
 
@@ -535,8 +536,8 @@ class Executor:
             told = self.sem.literals(self.state.true if t is None else t, m.atoms)
         return Action(self.sem.names[m.agent], m.kind, label, name, args, m.cost, told)
 
-    def _agenda(self, ag: tuple[int, ...]) -> list[str]:
-        return [self.grounded.task_names[t] for t in ag if t != FINISH]
+    def _agenda(self, ag: Agenda) -> list[str]:  # a partially ordered block as {a | b} (§1)
+        return self.sem.net.names_of(ag)
 
     def _answer(self, es: EState, label: str) -> bool | None:
         """The truthful answer to the human's question ``label`` in ``es``."""

@@ -1,0 +1,303 @@
+"""Partially ordered methods (docs/semantics.md §1, "Partial order"): both agents' options, the
+human's anticipation of the robot, the canonical form, printing, the validator's independent
+reading, and the recursion bound ``[limits] max_decomposition``."""
+
+from __future__ import annotations
+
+import random
+from pathlib import Path
+
+import pytest
+
+import ehatp
+from ehatp import HIDDEN, INFERABLE, Domain, DomainError, HumanModel, Var, observable
+from ehatp.check import validator as V
+from ehatp.model.htn import Block, Networks
+
+from .scenarios import labels, problem, walk
+
+
+def shop(order: list[tuple[int, int]] | None, *, human_order: bool = False,
+         post_done: bool = False) -> Domain:
+    """The robot's ``tidy`` is ``sweep`` and ``dust``, ordered by ``order``; the human's
+    ``errands`` is ``buy`` and ``post`` (unordered with ``human_order``; ``post`` skipped once
+    done with ``post_done``, and then hidden). Robot work is seen from ``home``."""
+    d = Domain("shop")
+    home = d.predicate("home")
+    d.copresence = home()
+    seen = observable(home())  # from home
+    swept, dusted = d.predicate("swept", observability=seen), d.predicate("dusted",
+                                                                          observability=seen)
+    bought = d.predicate("bought")
+    posted = d.predicate("posted", observability=HIDDEN if post_done else seen)
+    sweep = d.robot.action("sweep", pre=~swept(), effects=[swept()])
+    dust = d.robot.action("dust", pre=~dusted(), effects=[dusted()])
+    tidy = d.robot.task("tidy")
+    d.robot.method(tidy, "both", subtasks=[sweep(), dust()], order=order)
+    buy = d.human.action("buy", pre=~bought(), effects=[bought()])
+    post = d.human.action("post", pre=~posted(), effects=[posted()],
+                          done=posted() if post_done else None)
+    errands = d.human.task("errands")
+    d.human.method(errands, "both", subtasks=[buy(), post()],
+                   order=[] if human_order else None)
+    return d
+
+
+# -- options ----------------------------------------------------------------------------------
+
+def test_unordered_robot_method_offers_both_orders() -> None:
+    p = problem(shop([]), init=["home"], robot=["tidy"], starts="robot", objects={})
+    sem, es = walk(p)
+    assert sorted(labels(sem, es)[:2]) == ["dust", "sweep"]
+    # and after either, the other one is what is left
+    for first, then in (("dust", "sweep"), ("sweep", "dust")):
+        sem, es = walk(p, first)
+        assert sem.net.names_of(es.robot_agenda) == [then]
+    # totally ordered (the default), only the first subtask
+    sem, es = walk(problem(shop(None), init=["home"], robot=["tidy"], starts="robot",
+                           objects={}))
+    assert [x for x in labels(sem, es) if x in ("dust", "sweep")] == ["sweep"]
+
+
+def test_unordered_human_method_offers_both_orders() -> None:
+    p = problem(shop(None, human_order=True), init=["home"], human=["errands"], objects={})
+    sem, es = walk(p)
+    assert sorted(x for x in labels(sem, es) if x in ("buy", "post")) == ["buy", "post"]
+    sem, es = walk(problem(shop(None), init=["home"], human=["errands"], objects={}))
+    assert [x for x in labels(sem, es) if x in ("buy", "post")] == ["buy"]
+
+
+def test_the_human_anticipates_both_orders_of_the_robot() -> None:
+    """Unseen, the robot may have swept or dusted first: the human imagines both."""
+    d = shop([])
+    leave = d.human.action("leave", pre=d.predicates["home"](), effects=[~d.predicates["home"]()])
+    out = d.human.task("out")
+    d.human.method(out, "go", subtasks=[leave()])
+    p = problem(d, init=["home"], robot=["tidy"], human=["out"], objects={})
+    sem, es = walk(p, "leave", "sweep")
+    seen = sorted((sorted(sem.g.state_atoms(s)), sem.net.names_of(ag)) for s, ag in es.worlds)
+    assert seen == [([], ["tidy"]), (["dusted"], ["sweep"]), (["swept"], ["dust"])]
+
+
+def test_a_partial_order_keeps_the_rest_in_order() -> None:
+    """[a, b, c] with a < c and b < c: a and b in either order, then c."""
+    d = Domain("abc")
+    a_, b_, c_ = d.predicate("a"), d.predicate("b"), d.predicate("c")
+    A = d.robot.action("A", pre=~a_(), effects=[a_()])
+    B = d.robot.action("B", pre=~b_(), effects=[b_()])
+    C = d.robot.action("C", pre=a_() & b_(), effects=[c_()])
+    t = d.robot.task("t")
+    d.robot.method(t, "m", subtasks=[A(), B(), C()], order=[(0, 2), (1, 2)])
+    p = problem(d, init=[], robot=["t"], starts="robot", objects={})
+    sem, es = walk(p)
+    assert [m.label for m in sem.moves(es) if m.kind == "action"] == ["A", "B"]
+    child = sem.follow(es, "A").child
+    assert child is not None
+    assert sem.net.names_of(child.robot_agenda) == ["B", "C"]  # plain tasks again
+    r = ehatp.solve(p)
+    assert r.status == "solved" and r.policy is not None
+    assert r.policy.nodes[0].robot_agenda == ["t"]
+    assert ehatp.validate(p, r.policy).ok
+
+
+# -- the order the human can witness ------------------------------------------------------------
+
+def witness(order: list[tuple[int, int]] | None) -> ehatp.Problem:
+    """The robot seals (inferable: the human learns it only by seeing it) and sweeps; the human
+    is there at first, then leaves for good and ships, which needs the seal."""
+    d = Domain("witness")
+    home = d.predicate("home")
+    d.copresence = home()
+    sealed = d.predicate("sealed", observability=INFERABLE)
+    swept = d.predicate("swept")
+    seal = d.robot.action("seal", pre=~sealed(), effects=[sealed()])
+    sweep = d.robot.action("sweep", pre=~swept(), effects=[swept()])
+    job = d.robot.task("job")
+    d.robot.method(job, "both", subtasks=[sweep(), seal()], order=order)
+    d.human.action("leave", pre=home(), effects=[~home()])
+    d.human.action("ship", pre=sealed(), effects=[])
+    return problem(d, init=["home"], robot=["job"], human=["leave", "ship"], starts="robot",
+                   objects={})
+
+
+def test_the_planner_does_the_hidden_task_in_front_of_the_human() -> None:
+    r = ehatp.solve(witness([]))
+    assert r.status == "solved" and r.policy is not None
+    root = r.policy.nodes[0]
+    assert root.copresent and [m.action for m in root.moves] == ["seal"]
+    assert r.policy.communications == 0
+    assert ehatp.validate(witness([]), r.policy).ok
+    # listed sweep first and totally ordered, the human may leave before the seal: no policy
+    assert ehatp.solve(witness(None)).status == "unsolvable"
+
+
+def test_a_member_done_in_some_worlds_only_is_uncertain_to_the_human() -> None:
+    """The human's unordered ``errands``, ``post`` done in one world of two: the done member is
+    removed in that world only, so even ``buy`` is not certain (what is left after it differs
+    between the worlds), and the human asks."""
+    d = shop(None, human_order=True, post_done=True)
+    p = problem(d, init=["home"], human=["errands"], objects={},
+                beliefs=[([], []), (["posted"], [])])
+    sem, es = walk(p)
+    opts = labels(sem, es)
+    assert "ask(posted)" in opts and "buy" not in opts and "post" not in opts
+    r = ehatp.solve(p)
+    assert r.status == "solved" and r.policy is not None
+    assert ehatp.validate(p, r.policy).ok
+
+
+# -- canonical form and printing ----------------------------------------------------------------
+
+NAMES = [f"t{i}" for i in range(10)]
+
+
+def test_equal_networks_are_equal_agendas() -> None:
+    net = Networks(NAMES)
+    one = net.normal([(1, 0), (2, 0)])
+    assert net.normal([(2, 0), (1, 0)]) == one and isinstance(one[0], Block)
+    # a member refined into an unordered pair flattens into the block
+    outer = one[0]
+    assert isinstance(outer, Block)
+    inner = net.normal([(3, 0), (4, 0)])
+    assert net.replace(outer, 0, inner) == net.normal([(2, 0), (3, 0), (4, 0)])
+    # a totally ordered method is its plain tuple of ints, untouched
+    assert net.body((5, 6, 7), None) == (5, 6, 7)
+    assert net.body((5, 6, 7), (0, 1, 3)) == (5, 6, 7)
+    # a first part wholly before the rest is cut off: [a, b, c] with a < c, b < c
+    cut = net.body((1, 2, 3), (0, 0, 3))
+    assert isinstance(cut[0], Block) and cut[1:] == (3,)
+    assert net.names_of(cut) == ["{t1 | t2}", "t3"]
+
+
+def test_printing() -> None:
+    net = Networks(NAMES)
+    # {t1 < t2 | t3}
+    (b,) = net.normal([(1, 0), (2, 1), (3, 0)])
+    assert isinstance(b, Block) and net.text(b) == "{t1 < t2 | t3}"
+    # an N: t1 < t3, t2 < t3, t2 < t4
+    (n,) = net.normal([(1, 0), (2, 0), (3, 0b11), (4, 0b10)])
+    assert isinstance(n, Block)
+    assert net.text(n) == "{t1 | t2 | t3 | t4; t1 < t3, t2 < t3, t2 < t4}"
+    # {t1 | t2} < t3 inside a group unlinked to t4
+    (m,) = net.normal([(1, 0), (2, 0), (3, 0b11), (4, 0)])
+    assert isinstance(m, Block) and net.text(m) == "{{t1 | t2} < t3 | t4}"
+
+
+def _random_members(r: random.Random) -> list[tuple[int, int]]:
+    n = r.randint(1, 6)
+    preds = [0] * n
+    for j in range(n):
+        for i in range(j):
+            if r.random() < 0.35:
+                preds[j] |= 1 << i | preds[i]
+    order = list(range(n))
+    r.shuffle(order)  # positions need not be a topological order
+    pos = {old: new for new, old in enumerate(order)}
+    out = [(0, 0)] * n
+    for old, new in pos.items():
+        m = sum(1 << pos[i] for i in range(n) if preds[old] >> i & 1)
+        out[new] = (r.randint(0, 4), m)
+    return out
+
+
+def _as_validator(sem: V._Semantics, ag: tuple[object, ...]) -> V.Agenda:
+    out: list[int | V.Block] = []
+    for it in ag:
+        if isinstance(it, Block):
+            pairs = {(i, j) for j, (_, m) in enumerate(it) for i in range(len(it)) if m >> i & 1}
+            built = sem.canon([t for t, _ in it], pairs)
+            assert len(built) == 1
+            out.extend(built)
+        else:
+            assert isinstance(it, int)
+            out.append(it)
+    return tuple(out)
+
+
+def test_planner_and_validator_build_and_print_networks_alike() -> None:
+    """The two independent implementations of the canonical form and of printing agree on
+    random partial orders, and after refining or finishing a member."""
+    d = Domain("nets")
+    for i in range(5):
+        d.robot.action(f"t{i}")
+    p = problem(d, init=[], robot=[f"t{i}" for i in range(5)], objects={})
+    sem = V._Semantics(p)
+    names = sem.g.task_names
+    net = Networks(names)
+    r = random.Random(5)
+    for _ in range(400):
+        ms = _random_members(r)
+        mine = net.normal(ms)
+        pairs = {(i, j) for j, (_, m) in enumerate(ms) for i in range(len(ms)) if m >> i & 1}
+        theirs = sem.canon([t for t, _ in ms], pairs)
+        assert _as_validator(sem, mine) == theirs
+        assert net.names_of(mine) == sem.shown(theirs)
+        for k, it in enumerate(mine):
+            if not isinstance(it, Block):
+                continue
+            vb = theirs[k]
+            assert isinstance(vb, V.Block)
+            for i in range(len(it)):
+                assert _as_validator(sem, net.without(it, i)) == sem.drop(vb, i)
+                rest = net.normal(_random_members(r))
+                assert (_as_validator(sem, net.replace(it, i, rest))
+                        == sem.put(vb, i, _as_validator(sem, rest)))
+
+
+# -- the domain checks the order; the decomposition bound ---------------------------------------
+
+@pytest.mark.parametrize(("order", "says"), [
+    ([(0, 2)], "names a subtask it does not have"),
+    ([(1, 1)], "before itself"),
+    ([(0, 1), (1, 0)], "cycle"),
+    ([(0,)], "not a pair"),
+])
+def test_a_bad_order_is_a_domain_error(order: list[tuple[int, int]], says: str) -> None:
+    with pytest.raises(DomainError, match=says):
+        shop(order)
+
+
+def looping(limit: int | None = None) -> ehatp.Problem:
+    d = Domain("loop")
+    x = Var("x", d.type("thing"))
+    count = d.predicate("count", x)
+    tick = d.robot.action("tick", x, pre=~count(x), effects=[count(x)])
+    deep = d.robot.task("deep", x)
+    d.robot.method(deep, "again", pre=~count(x), subtasks=[deep(x)])
+    d.robot.method(deep, "stop", subtasks=[tick(x)])
+    p = problem(d, init=[], robot=["deep(a)"], objects={"thing": ["a"]}, starts="robot")
+    if limit is not None:
+        p.limits = ehatp.Limits(max_decomposition=limit)
+    return p
+
+
+def test_a_task_that_decomposes_without_end_names_the_limit() -> None:
+    with pytest.raises(DomainError, match=r"deep\(a\) decomposes without end.*max_decomposition"):
+        ehatp.solve(looping(8))
+
+
+def test_max_decomposition_is_a_problem_limit(tmp_path: Path) -> None:
+    text = Path(__file__).parent.parent.joinpath("examples/cubes/p1.toml").read_text("utf-8")
+    f = tmp_path / "p.toml"
+    f.write_text(text + "\n[limits]\nmax_decomposition = 7\n", encoding="utf-8")
+    assert ehatp.load(f).limits.max_decomposition == 7
+    assert ehatp.Limits().max_decomposition == 64
+    f.write_text(text + "\n[limits]\nmax_decomposition = 0\n", encoding="utf-8")
+    with pytest.raises(ehatp.InputError, match="max_decomposition"):
+        ehatp.load(f)
+
+
+def test_uncertain_human_anticipation_is_validated() -> None:
+    """A policy over a problem with unordered methods on both sides, the human away for a
+    while: the validator (its own reading of §1) accepts the planner's policy."""
+    d = shop([], human_order=True)
+    home = d.predicates["home"]
+    leave = d.human.action("leave", pre=home(), effects=[~home()])
+    back = d.human.action("back", pre=~home(), effects=[home()])
+    trip = d.human.task("trip")
+    d.human.method(trip, "go", subtasks=[leave(), back()])
+    p = problem(d, init=["home"], robot=["tidy"], human=["trip", "errands"], objects={},
+                human_model=HumanModel())
+    r = ehatp.solve(p)
+    assert r.status == "solved" and r.policy is not None
+    assert ehatp.validate(p, r.policy).ok
