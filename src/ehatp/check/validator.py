@@ -437,15 +437,64 @@ class _Semantics:
 
     # -- section 2: observation ----------------------------------------------------------------
 
+    def unit(self, i: int) -> int:
+        """§2: the unit atom ``i`` belongs to, as a mask: the atom itself, or every atom of
+        its state variable (one per value) or of its counter (one per bit)."""
+        return self.g.unit_of.get(i, 1 << i)
+
+    def units(self, m: int) -> list[int]:
+        """The units the atoms of ``m`` belong to, in index order."""
+        out: list[int] = []
+        for i in _bits(m):
+            u = self.unit(i)
+            if u not in out:
+                out.append(u)
+        return out
+
+    def is_variable(self, u: int) -> bool:
+        return u in self.g.unit_names and u not in self.g.counter_max
+
+    def say(self, t: int, u: int) -> str:
+        """§5: unit ``u`` as ``t`` has it: ``a`` or ``not a`` for an atom, ``loc(r) = mt`` for
+        a state variable, ``balls(b1) = 2`` for a counter."""
+        g = self.g
+        low = _bits(u)[0]
+        if u in g.counter_max:
+            return f"{g.unit_names[u]} = {(t & u) >> low}"
+        if u in g.unit_names:
+            return g.atoms[_bits(t & u)[0]]
+        return g.atoms[low] if t >> low & 1 else f"not {g.atoms[low]}"
+
+    def unit_name(self, u: int) -> str:
+        return self.g.unit_names.get(u) or self.g.atoms[_bits(u)[0]]
+
     def observe(self, worlds: Worlds, t: int, atoms: Iterable[int]) -> Worlds:
-        """§2 and §5: learn T's value of each atom, in order: keep the worlds that agree; if
-        none does, set the atom to T's value in every world (belief revision)."""
+        """§2 and §5: learn T's value of the atoms, unit by unit in index order (an atom; the
+        atoms of one state variable that are observed; a counter): keep the worlds that agree
+        on them; if none does, revise every world: an atom or a counter takes T's value; a
+        state variable takes T's value when it is among the observed atoms, else the world
+        becomes one world per value of the variable not observed false (exactly one value)."""
         ws = set(worlds)
+        parts: dict[int, int] = {}
         for i in atoms:
-            bit = 1 << i
-            agree = {w for w in ws if (w[0] ^ t) & bit == 0}
-            ws = agree or {((s & ~bit) | (t & bit), ag) for s, ag in ws}
+            u = self.unit(i)
+            parts[u] = parts.get(u, 0) | 1 << i
+        for u in sorted(parts):  # units are disjoint runs of atoms: this is index order
+            part = parts[u]
+            agree = {w for w in ws if (w[0] ^ t) & part == 0}
+            if agree:
+                ws = agree
+            elif not self.is_variable(u):
+                ws = {((s & ~part) | (t & part), ag) for s, ag in ws}
+            elif t & part:
+                ws = {((s & ~u) | (t & u), ag) for s, ag in ws}
+            else:
+                ws = {((s & ~u) | 1 << j, ag) for s, ag in ws for j in _bits(u & ~part)}
         return frozenset(ws)
+
+    def tell(self, worlds: Worlds, t: int, units: Iterable[int]) -> Worlds:
+        """§5: the human learns T's value of every unit (an atom, a variable, a counter)."""
+        return self.observe(worlds, t, [i for u in sorted(units) for i in _bits(u)])
 
     def sa(self, worlds: Worlds, t: int) -> Worlds:
         """§2: situation assessment (step 2; step 1 is the case where no revision happens)."""
@@ -491,8 +540,12 @@ class _Semantics:
         return frozenset(out)
 
     def set_inferable(self, worlds: Worlds, old: int, new: int) -> Worlds:
-        """§4: the inferable atoms an action changed in T are set in every world."""
-        m = (old ^ new) & self.g.inferable_mask
+        """§4: the inferable atoms an action changed in T are set in every world (a state
+        variable or a counter whole)."""
+        m = 0
+        for u in self.units(old ^ new):
+            m |= u
+        m &= self.g.inferable_mask
         return frozenset(((s & ~m) | (new & m), ag) for s, ag in worlds)
 
     def sees_robot_done(self, worlds: Worlds, true: int, robot: Agenda) -> Worlds:
@@ -578,27 +631,27 @@ class _Semantics:
         after = self.advance(es, SILENCE, es.true, es.robot, es.human, es.worlds, es.k)
         return Step(ROBOT, SILENCE, SILENCE, Fraction(0), after)
 
-    def literals(self, t: int, atoms: Iterable[int]) -> tuple[str, ...]:
-        return tuple(self.g.atoms[i] if t >> i & 1 else f"not {self.g.atoms[i]}"
-                     for i in atoms)
+    def literals(self, t: int, units: Iterable[int]) -> tuple[str, ...]:
+        return tuple(self.say(t, u) for u in units)
 
-    def inform(self, es: EState, atoms: Sequence[int]) -> Step:
-        """§5: ``inform(A)``: the human learns T's value of every atom of A, nothing else is
-        witnessed (k unchanged, no world multiplied, also while apart)."""
-        worlds = self.observe(es.worlds, es.true, sorted(atoms))
+    def inform(self, es: EState, units: Sequence[int]) -> Step:
+        """§5: ``inform(A)``: the human learns T's value of every unit of A (an atom, a state
+        variable, a counter), nothing else is witnessed (k unchanged, no world multiplied,
+        also while apart)."""
+        worlds = self.tell(es.worlds, es.true, units)
         after = self.advance(es, INFORM, es.true, es.robot, es.human, worlds, es.k)
-        label = f"inform({', '.join(self.literals(es.true, sorted(atoms)))})"
+        label = f"inform({', '.join(self.literals(es.true, sorted(units)))})"
         return Step(ROBOT, INFORM, label, _frac(self.p.costs.inform), after)
 
-    def informed(self, es: EState, atoms: Sequence[int]) -> EState:
-        """The node as it is once the human has heard ``inform(atoms)``, before the action
+    def informed(self, es: EState, units: Sequence[int]) -> EState:
+        """The node as it is once the human has heard ``inform(units)``, before the action
         said with it runs (speech "with-action", section 5)."""
-        return replace(es, worlds=self.observe(es.worlds, es.true, sorted(atoms)))
+        return replace(es, worlds=self.tell(es.worlds, es.true, units))
 
-    def with_speech(self, es: EState, atoms: Sequence[int], st: Step) -> Step:
+    def with_speech(self, es: EState, units: Sequence[int], st: Step) -> Step:
         """§5: ``inform(A) + a``: A is heard first, then ``st`` (computed from the informed
         node) runs as usual; the costs add up."""
-        told = self.literals(es.true, atoms)
+        told = self.literals(es.true, units)
         label = f"inform({', '.join(told)}) + {st.act}"
         return Step(ROBOT, st.kind, label, _frac(self.p.costs.inform) + st.cost, st.after,
                     act=st.act, told=told)
@@ -752,12 +805,12 @@ class _Semantics:
         div = 0
         for s, _ in es.worlds:
             div |= s ^ es.true
-        cands = _bits(div)
+        cands = self.units(div)  # an atom, or a state variable or counter told whole
         limit = self.p.communication.inform_max_atoms
         fixed: dict[tuple[int, ...], tuple[bool, bool, bool]] = {}
         for n in range(1, limit + 1):
             for sub in itertools.combinations(cands, n):
-                h, r, p = self.views_differ(es, self.observe(es.worlds, es.true, sub))
+                h, r, p = self.views_differ(es, self.tell(es.worlds, es.true, sub))
                 fixed[sub] = (not h, not r, not p)
         both = "the human's views" + (" and plans" if plan else "")
         alone = "the human's options" + (" and plans" if plan else "")
@@ -775,17 +828,17 @@ class _Semantics:
         return f"no set of at most inform_max_atoms = {limit} atoms fixes {alone}"
 
     def check_inform(self, es: EState, atoms: Sequence[int]) -> str | None:
-        """§5: why ``inform(atoms)`` is not a legal robot option here (None when it is)."""
-        g = self.g
+        """§5: why ``inform(atoms)`` (units, as masks) is not a legal robot option here (None
+        when it is)."""
         why = self.inform_where(es)
         if why is not None:
             return why
         div = 0
         for s, _ in es.worlds:
             div |= s ^ es.true
-        for i in atoms:
-            if not div >> i & 1:
-                return (f"every world already agrees with the truth on {g.atoms[i]}: "
+        for u in atoms:
+            if not div & u:
+                return (f"every world already agrees with the truth on {self.unit_name(u)}: "
                         "informing the human of what it believes is never generated")
         limit = self.p.communication.inform_max_atoms
         found = self.inform_search(es)
@@ -797,7 +850,7 @@ class _Semantics:
         mine = tuple(sorted(atoms))
         if mine in sets:
             return self.check_choice(es, mine, sets)
-        h, r, p = self.views_differ(es, self.observe(es.worlds, es.true, mine))
+        h, r, p = self.views_differ(es, self.tell(es.worlds, es.true, mine))
         fixes = (not h and not p) if what.startswith("the human's options") else not (h or r or p)
         if not fixes:
             return f"it does not fix {what}, yet a set of {n} atom(s) does"
@@ -810,8 +863,9 @@ class _Semantics:
         """§5: among smallest sets, the one leaving the fewest worlds, then telling more true
         atoms, then the first by atom names."""
         def key(a: tuple[int, ...]) -> tuple[int, int, tuple[str, ...]]:
-            left = len(self.observe(es.worlds, es.true, a))
-            return left, -sum(es.true >> i & 1 for i in a), tuple(self.g.atoms[i] for i in a)
+            left = len(self.tell(es.worlds, es.true, a))
+            told_true = sum(1 for u in a if es.true & u or u in self.g.unit_names)  # a value
+            return left, -told_true, tuple(self.unit_name(u) for u in a)
 
         best = min(sets, key=key)
         if best == atoms:
@@ -837,23 +891,36 @@ class _Semantics:
 
     # -- reading labels ------------------------------------------------------------------------
 
-    def parse_inform(self, label: str) -> list[tuple[int, bool]] | str:
-        """``inform(a, not b(x, y))`` -> (atom index, value the label states) pairs."""
+    def parse_inform(self, label: str) -> list[tuple[int, str]] | str:
+        """``inform(a, not b(x, y), loc(r) = mt, balls(b1) = 2)`` -> (unit, literal as
+        written) pairs: an atom told true or false, a state variable's or counter's value."""
         inner = label[len("inform("):-1] if label.startswith("inform(") and label.endswith(
             ")") else None
         if not inner:
             return f"cannot read {label!r} as inform(atom, ...)"
-        out: list[tuple[int, bool]] = []
+        g = self.g
+        valued = {name: u for u, name in g.unit_names.items()}
+        out: list[tuple[int, str]] = []
         buf = ""
         for tok in inner.split(", "):  # atoms contain ", " too: grow until one is known
             buf = f"{buf}, {tok}" if buf else tok
+            head, eq_, value = buf.rpartition(" = ")
+            u = valued.get(head) if eq_ else None
+            if u is not None:
+                top = g.counter_max.get(u)
+                if (buf in self.atom_of and self.unit(self.atom_of[buf]) == u if top is None
+                        else value.isdigit() and int(value) <= top):
+                    out.append((u, buf))
+                    buf = ""
+                continue
             neg = buf.startswith("not ")
             name = buf[4:] if neg else buf
-            if name in self.atom_of:
-                out.append((self.atom_of[name], not neg))
+            i = self.atom_of.get(name)
+            if i is not None and self.unit(i) == 1 << i:
+                out.append((1 << i, buf))
                 buf = ""
         if buf or not out:
-            return f"cannot read {label!r}: {buf!r} is not a fluent atom"
+            return f"cannot read {label!r}: {buf!r} is not a fluent atom or a value"
         return out
 
 
@@ -981,23 +1048,29 @@ class _Validator:
                f"{agenda} under T"
 
     def inform_atoms(self, es: EState, label: str) -> list[int] | str:
-        """The atoms of ``inform(...)`` in label order, if it is a legal inform here (§5)."""
-        sem, g = self.sem, self.sem.g
+        """The units of ``inform(...)`` (atoms, state variables, counters, as masks) in label
+        order, if it is a legal inform here (§5)."""
+        sem = self.sem
         parsed = sem.parse_inform(label)
         if isinstance(parsed, str):
             return parsed
-        atoms = [i for i, _ in parsed]
-        if len(set(atoms)) != len(atoms):
+        units = [u for u, _ in parsed]
+        if len(set(units)) != len(units):
             return "an atom is told twice"
         why = sem.inform_where(es)
         if why is not None:
             return why
-        for i, value in parsed:  # the label tells literals of T
-            if bool(es.true >> i & 1) != value:
-                return f"the label tells {g.atoms[i]} is {str(value).lower()}, but it is " \
+        for u, said in parsed:  # the label tells literals (values) of T
+            truth = sem.say(es.true, u)
+            if said != truth:
+                if u in sem.g.unit_names:
+                    return f"the label tells {said}, but T has {truth}"
+                value = not said.startswith("not ")
+                name = said[4:] if not value else said
+                return f"the label tells {name} is {str(value).lower()}, but it is " \
                        f"{str(not value).lower()} in T"
-        why = sem.check_inform(es, atoms)
-        return why if why is not None else atoms
+        why = sem.check_inform(es, units)
+        return why if why is not None else units
 
     def human_steps(self, es: EState, label: str,
                     options: list[Step] | None = None) -> list[Step]:
@@ -1037,11 +1110,18 @@ class _Validator:
         cmp("goal", node.goal, goal)
         div = 0
         diffs = []
+        t = es.true
         for s in {s for s, _ in es.worlds}:
-            div |= s ^ es.true
-            diffs.append((frozenset(g.mask_atoms(s & ~es.true)),
-                          frozenset(g.mask_atoms(es.true & ~s))))
-        want_div = {g.atoms[i] if es.true >> i & 1 else f"not {g.atoms[i]}" for i in _bits(div)}
+            div |= s ^ t
+            # atoms true in the world only, and true in T only; a counter by its values
+            counters = [u for u in sem.units(s ^ t) if u in g.counter_max]
+            plain = s ^ t
+            for u in counters:
+                plain &= ~u
+            diffs.append((frozenset([*g.mask_atoms(s & plain), *(sem.say(s, u) for u in counters)]),
+                          frozenset([*g.mask_atoms(t & plain),
+                                     *(sem.say(t, u) for u in counters)])))
+        want_div = {sem.say(t, u) for u in sem.units(div)}
         if set(node.divergence) != want_div:
             cmp("divergence", sorted(node.divergence), sorted(want_div))
         got_diffs = sorted((sorted(d.get("true", [])), sorted(d.get("false", [])))
@@ -1314,7 +1394,7 @@ class _Validator:
         if st.kind == INFORM:
             parsed = self.sem.parse_inform(st.label)
             assert not isinstance(parsed, str)
-            return INFORM, [g.atoms[i] if v else f"not {g.atoms[i]}" for i, v in parsed]
+            return INFORM, [said for _, said in parsed]
         if st.kind == ASK:
             return ASK, [st.label[len("ask("):-1]]
         return st.kind, []  # wait, pass, silence (also a wait said with an inform)

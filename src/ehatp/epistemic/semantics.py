@@ -124,9 +124,9 @@ class Semantics:
         return Call(move.kind, (), move.label)
 
     def literals(self, t: int, mask: int) -> tuple[str, ...]:
-        """The atoms of ``mask`` as ``t`` has them: ``a`` when true, ``not a`` when false."""
-        return tuple(self.g.atoms[i] if t >> i & 1 else f"not {self.g.atoms[i]}"
-                     for i in bits_of(mask))
+        """§5: the units of ``mask`` as ``t`` has them: ``a`` when true, ``not a`` when false,
+        ``loc(r) = mt`` for a state variable, ``balls(b1) = 2`` for a counter."""
+        return tuple(self.g.literals(t, mask))
 
     # -- basics ---------------------------------------------------------------------------
     def initial(self) -> EState:
@@ -172,14 +172,31 @@ class Semantics:
         return self.observe(t, worlds, vm)
 
     def observe(self, t: int, worlds: Worlds, mask: int) -> Worlds:
-        """Learn ``t``'s value of each atom of ``mask``, one atom at a time in index order:
-        filter the worlds on it, or revise it in every world when none agrees."""
+        """§2, §5: learn ``t``'s value of each unit of ``mask`` (an atom; the observed bits
+        of a state variable; a counter), one unit at a time in index order: filter the worlds
+        on it, or revise it in every world when none agrees. A variable is revised to ``t``'s
+        value when ``mask`` holds it, else each world becomes one world per value ``mask``
+        does not show false (exactly one value, always)."""
         ws = list(worlds)
-        for i in bits_of(mask):
-            bit = 1 << i
-            tb = t & bit
-            keep = [w for w in ws if w[0] & bit == tb]
-            ws = keep if keep else [((s & ~bit) | tb, a) for s, a in ws]
+        g = self.g
+        if not mask & g.multi_mask:
+            for i in bits_of(mask):
+                bit = 1 << i
+                tb = t & bit
+                keep = [w for w in ws if w[0] & bit == tb]
+                ws = keep if keep else [((s & ~bit) | tb, a) for s, a in ws]
+            return normalize(ws)
+        for u in g.units(mask):
+            part = u & mask
+            tb = t & part
+            keep = [w for w in ws if w[0] & part == tb]
+            if keep:
+                ws = keep
+            elif tb or u not in g.unit_names or u in g.counter_max:
+                whole = u if u in g.unit_names and u not in g.counter_max else part
+                ws = [((s & ~whole) | (t & whole), a) for s, a in ws]
+            else:  # "not this value" with no world agreeing: any value not seen false
+                ws = [((s & ~u) | 1 << i, a) for s, a in ws for i in bits_of(u & ~part)]
         return normalize(ws)
 
     def robot_op(self, op: int) -> GOp:
@@ -309,7 +326,7 @@ class Semantics:
             if not new:  # the human could not have expected it: revise
                 seen, told = self.anticipated_op(op.id), self.attributed(rest)
                 new = [(seen.apply(s), told) for s, _ in es.worlds]
-            inf = (es.true ^ t2) & self.g.inferable_mask
+            inf = self.g.expand(es.true ^ t2) & self.g.inferable_mask
             if inf:
                 new = [((s & ~inf) | (t2 & inf), a) for s, a in new]
             worlds, k = normalize(new), es.k
@@ -368,12 +385,13 @@ class Semantics:
         and every world advance, inferable atoms are learned, then situation assessment."""
         t = es.true
         if not op.pre(t):
-            false = [self.g.atoms[i] for i in bits_of(self._unmet(op, t, es.worlds[0][0]))]
+            false = [self.g.unit_name(u)
+                     for u in self.g.units(self._unmet(op, t, es.worlds[0][0]))]
             why = f"{self.names[HUMAN]} does {op.name} on a false belief"
             return Move(HUMAN, ACTION, op.name, op.cost, None, op.id,
                         failure=why + (f" ({', '.join(false)})" if false else ""))
         t2 = op.apply(t)
-        inf = (t ^ t2) & self.g.inferable_mask
+        inf = self.g.expand(t ^ t2) & self.g.inferable_mask
         new = []
         for s, ag in es.worlds:
             s2 = op.apply(s)
@@ -417,7 +435,7 @@ class Semantics:
             m = 0
             for i in ground_atoms(phi):
                 m |= 1 << i
-            keep = self.observe(es.true, es.worlds, m)
+            keep = self.observe(es.true, es.worlds, self.g.expand(m))
         return es._replace(turn=ROBOT, worlds=keep, passive=0, forced=False)
 
     def inform(self, es: EState, mask: int) -> EState:
@@ -469,7 +487,8 @@ class Semantics:
         return any(self.plans(agenda, s) != want for s in states_of(worlds))
 
     def informing_set(self, es: EState) -> int:
-        """§5: a smallest set of atoms (as a mask) whose correction makes the human's next
+        """§5: a smallest set of units -- atoms, state variables and counters, each told whole
+        -- (as a mask) whose correction makes the human's next
         options, its expectations of the robot (FINISH included) and, under relevance "plan",
         its plans, computed on W, equal those computed on the truth; 0 when the divergence is
         irrelevant or cannot be fixed by telling atoms."""
@@ -495,7 +514,8 @@ class Semantics:
         p_diff = plan and self._plans_differ(es.human_agenda, t, es.worlds)
         if not (h_diff or r_diff or p_diff):
             return 0
-        cands = bits_of(div)
+        g = self.g
+        cands = g.units(div)  # an atom, or a variable or counter told whole
         # make every view equal (fixing one must not break another); failing that, the
         # human's own (next options and plans) alone
         targets = [(True, True, plan)]
@@ -506,8 +526,8 @@ class Semantics:
                 best: tuple[int, int, list[str], int] | None = None
                 for combo in combinations(cands, size):
                     m = 0
-                    for i in combo:
-                        m |= 1 << i
+                    for u in combo:
+                        m |= u
                     w2 = self.observe(t, es.worlds, m)
                     if want_h and self.human_view(es.human_agenda, states_of(w2)) != hv_t:
                         continue
@@ -515,8 +535,10 @@ class Semantics:
                         continue
                     if want_p and self._plans_differ(es.human_agenda, t, w2):
                         continue
-                    # prefer fewer remaining worlds, then telling what is true, then by name
-                    rank = (len(w2), -bin(t & m).count("1"), [self.g.atoms[i] for i in combo], m)
+                    # prefer fewer remaining worlds, then telling what is true (a value counts
+                    # as true), then by name
+                    told = sum(1 for u in combo if t & u or u in g.unit_names)
+                    rank = (len(w2), -told, [g.unit_name(u) for u in combo], m)
                     if best is None or rank < best:
                         best = rank
                 if best is not None:

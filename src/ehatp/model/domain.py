@@ -23,7 +23,24 @@ from dataclasses import dataclass, field
 from typing import Any, Literal, TypeVar
 
 from ..errors import EhatpError
-from .formula import TRUE, And, Atom, Eq, Exists, Forall, Formula, Not, Or, Term, Var, free_vars
+from .formula import (
+    TRUE,
+    And,
+    Atom,
+    Cmp,
+    Eq,
+    Exists,
+    Forall,
+    Formula,
+    Is,
+    Not,
+    Or,
+    Term,
+    ValueTerm,
+    Var,
+    free_vars,
+    term_str,
+)
 
 AGENT_TYPE = "agent"
 
@@ -80,14 +97,58 @@ HIDDEN = Observability("hidden")
 """Learned only through communication."""
 
 
+# --- types -----------------------------------------------------------------------------------
+
+
+class TypeHierarchy:
+    """The domain's types and their parents: ``d.type("cube", parent="object")`` makes every
+    cube an object, so a parameter, quantifier or variable of type ``object`` ranges over the
+    cubes too."""
+
+    def __init__(self) -> None:
+        self.parent: dict[str, str] = {}
+
+    def ancestors(self, t: str) -> list[str]:
+        """``t``'s parent, its parent's parent, ... (nearest first)."""
+        out: list[str] = []
+        while t in self.parent:
+            t = self.parent[t]
+            out.append(t)
+        return out
+
+    def is_sub(self, t: str, of: str) -> bool:
+        """Whether ``t`` is ``of`` or one of its subtypes."""
+        return t == of or of in self.ancestors(t)
+
+    def a(self, t: str) -> str:
+        """``"a cube, a subtype of object"``: the type with its ancestors, for messages."""
+        up = self.ancestors(t)
+        return f"{_article(t)} {t}" + (f", a subtype of {', of '.join(up)}" if up else "")
+
+
+def _article(t: str) -> str:
+    return "an" if t[:1].lower() in "aeiou" else "a"
+
+
+def signature(name: str, params: Sequence[Var]) -> str:
+    """``place(c: cube, b: box)``."""
+    return f"{name}({', '.join(f'{p.name}: {p.type}' for p in params)})"
+
+
 # --- predicates ------------------------------------------------------------------------------
 
 
-def _check_args(kind: str, name: str, params: Sequence[Var], args: Sequence[Term]) -> None:
+def _check_args(kind: str, name: str, params: Sequence[Var], args: Sequence[Term],
+                types: TypeHierarchy | None = None) -> None:
     if len(args) != len(params):
         raise DomainError(f"{kind} {name} takes {len(params)} argument(s), got {len(args)}")
     for p, a in zip(params, args, strict=True):
-        if isinstance(a, Var) and a.type != p.type:
+        if isinstance(a, Var) and not (a.type == p.type or types is not None
+                                       and types.is_sub(a.type, p.type)):
+            if types is not None and (types.ancestors(a.type) or types.ancestors(p.type)):
+                raise DomainError(f"{kind} {name}: argument {a.name} is {types.a(a.type)}; "
+                                  f"{signature(name, params)} wants {_article(p.type)} "
+                                  f"{p.type} for {p.name}")
             raise DomainError(
                 f"{kind} {name}: argument {a.name} has type {a.type}, expected {p.type}"
             )
@@ -100,9 +161,10 @@ class Predicate:
     name: str
     params: tuple[Var, ...]
     observability: Observability
+    types: TypeHierarchy | None = field(default=None, repr=False)
 
     def __call__(self, *args: Term) -> Atom:
-        _check_args("predicate", self.name, self.params, args)
+        _check_args("predicate", self.name, self.params, args, self.types)
         return Atom(self.name, tuple(args))
 
 
@@ -114,10 +176,166 @@ class Derived:
     name: str
     params: tuple[Var, ...]
     body: Formula
+    types: TypeHierarchy | None = field(default=None, repr=False)
 
     def __call__(self, *args: Term) -> Atom:
-        _check_args("derived predicate", self.name, self.params, args)
+        _check_args("derived predicate", self.name, self.params, args, self.types)
         return Atom(self.name, tuple(args))
+
+
+# --- finite-domain state variables and bounded counters (docs/modelling.md) ------------------
+
+
+@dataclass(frozen=True, eq=False)
+class StateVariable:
+    """``loc(c) ∈ Place``: one value among the objects of a type, in every state.
+
+    ``value`` is the value parameter: its type is the value type, and the visibility condition
+    may use it (``observable(at(H, p))`` with ``values=p``: the human sees whether the value is
+    ``p`` while at ``p``). Calling it gives a term: ``loc(c).eq(mt)``, ``loc(c) == mt``,
+    ``loc(c).set(box1)``."""
+
+    name: str
+    params: tuple[Var, ...]
+    value: Var
+    observability: Observability
+    types: TypeHierarchy | None = field(default=None, repr=False)
+
+    @property
+    def values(self) -> str:
+        """The value type."""
+        return self.value.type
+
+    def __call__(self, *args: Term) -> VarTerm:
+        _check_args("variable", self.name, self.params, args, self.types)
+        return VarTerm(self, tuple(args))
+
+
+class VarTerm(ValueTerm):
+    """``loc(c)``: compare it with a value (a formula) or assign it (an effect)."""
+
+    __slots__ = ("args", "var")
+    __hash__ = None  # type: ignore[assignment]  # == builds a formula
+
+    def __init__(self, var: StateVariable, args: tuple[Term, ...]) -> None:
+        self.var, self.args = var, args
+
+    def _value(self, value: object) -> Term:
+        v = self.var
+        if isinstance(value, Var):
+            ok = value.type == v.values or (v.types is not None
+                                             and v.types.is_sub(value.type, v.values))
+            if not ok:
+                raise DomainError(f"variable {self}: {value.name} is a {value.type}, but its "
+                                  f"values are {v.values}s")
+            return value
+        if isinstance(value, str):
+            return value
+        raise DomainError(f"variable {self}: a value is an object name or a parameter of type "
+                          f"{v.values}, not {value!r}")
+
+    def eq(self, value: Term | int) -> Formula:
+        """``loc(c) = value``."""
+        return Is(self.var.name, (*self.args, self._value(value)))
+
+    def ne(self, value: Term | int) -> Formula:
+        """``loc(c) != value``."""
+        return Not(self.eq(value))
+
+    def __eq__(self, value: object) -> Formula:  # type: ignore[override]
+        return self.eq(self._value(value))
+
+    def __ne__(self, value: object) -> Formula:  # type: ignore[override]
+        return self.ne(self._value(value))
+
+    def set(self, value: Term) -> Assign:
+        """The effect ``loc(c) := value``."""
+        return Assign(self.var.name, self.args, self._value(value))
+
+    def __str__(self) -> str:
+        return str(Atom(self.var.name, self.args))
+
+
+@dataclass(frozen=True, eq=False)
+class Counter:
+    """``balls(b) ∈ 0..max``: a bounded whole number, stored in binary (one atom per bit).
+    Calling it gives a term: ``balls(b) >= 2``, ``balls(b).eq(0)``, ``balls(b).incr()``."""
+
+    name: str
+    params: tuple[Var, ...]
+    max: int
+    observability: Observability
+    types: TypeHierarchy | None = field(default=None, repr=False)
+
+    def __call__(self, *args: Term) -> CounterTerm:
+        _check_args("counter", self.name, self.params, args, self.types)
+        return CounterTerm(self, tuple(args))
+
+
+class CounterTerm(ValueTerm):
+    """``balls(b)``: compare it with a number (a formula) or change it (an effect)."""
+
+    __slots__ = ("args", "counter")
+    __hash__ = None  # type: ignore[assignment]  # == builds a formula
+
+    def __init__(self, counter: Counter, args: tuple[Term, ...]) -> None:
+        self.counter, self.args = counter, args
+
+    def _k(self, k: object) -> int:
+        if isinstance(k, bool) or not isinstance(k, int):
+            raise DomainError(f"counter {self}: compare it with a whole number, not {k!r}")
+        return k
+
+    def _cmp(self, op: str, k: object) -> Formula:
+        return Cmp(self.counter.name, self.args, op, self._k(k))
+
+    def eq(self, value: Term | int) -> Formula:
+        """``balls(b) = k``."""
+        return self._cmp("==", value)
+
+    def ne(self, value: Term | int) -> Formula:
+        """``balls(b) != k``."""
+        return self._cmp("!=", value)
+
+    def __eq__(self, k: object) -> Formula:  # type: ignore[override]
+        return self._cmp("==", k)
+
+    def __ne__(self, k: object) -> Formula:  # type: ignore[override]
+        return self._cmp("!=", k)
+
+    def __lt__(self, k: object) -> Formula:
+        return self._cmp("<", k)
+
+    def __le__(self, k: object) -> Formula:
+        return self._cmp("<=", k)
+
+    def __gt__(self, k: object) -> Formula:
+        return self._cmp(">", k)
+
+    def __ge__(self, k: object) -> Formula:
+        return self._cmp(">=", k)
+
+    def set(self, k: int) -> Assign:
+        """The effect ``balls(b) := k`` (0 <= k <= max)."""
+        k = self._k(k)
+        if not 0 <= k <= self.counter.max:
+            raise DomainError(f"counter {self}: {k} is out of its range 0..{self.counter.max}")
+        return Assign(self.counter.name, self.args, k)
+
+    def incr(self, n: int = 1) -> Assign:
+        """The effect ``balls(b) += n``, saturating at ``max``."""
+        if self._k(n) <= 0:
+            raise DomainError(f"counter {self}: incr takes a positive number, not {n}")
+        return Assign(self.counter.name, self.args, None, n)
+
+    def decr(self, n: int = 1) -> Assign:
+        """The effect ``balls(b) -= n``, saturating at 0."""
+        if self._k(n) <= 0:
+            raise DomainError(f"counter {self}: decr takes a positive number, not {n}")
+        return Assign(self.counter.name, self.args, None, -n)
+
+    def __str__(self) -> str:
+        return str(Atom(self.counter.name, self.args))
 
 
 # --- effects ---------------------------------------------------------------------------------
@@ -139,8 +357,38 @@ class ForEach:
     effects: tuple[Effect, ...]
 
 
-Effect = Atom | Not | When | ForEach
-"""An atom is added, ``~atom`` is deleted."""
+@dataclass(frozen=True)
+class Assign:
+    """``v(args) := value`` for a state variable, ``c(args) := k`` for a counter, or, with
+    ``value`` None, ``c(args) += delta`` (saturating at 0 and the counter's max)."""
+
+    name: str
+    args: tuple[Term, ...]
+    value: Term | int | None
+    delta: int = 0
+
+    def __str__(self) -> str:
+        head = Atom(self.name, self.args)
+        if self.value is None:
+            return f"{head} {'+' if self.delta > 0 else '-'}= {abs(self.delta)}"
+        return f"{head} := {self.value if isinstance(self.value, int) else term_str(self.value)}"
+
+
+Effect = Atom | Not | When | ForEach | Assign
+"""An atom is added, ``~atom`` is deleted, an :class:`Assign` sets a variable or a counter."""
+
+
+def assign(term: VarTerm | CounterTerm, value: Term | int) -> Assign:
+    """The effect ``term := value``: ``assign(loc(c), box1)``, ``assign(balls(b), 0)``."""
+    if isinstance(term, VarTerm):
+        if isinstance(value, int):
+            raise DomainError(f"variable {term}: a value is an object, not {value!r}")
+        return term.set(value)
+    if isinstance(term, CounterTerm):
+        if not isinstance(value, int):
+            raise DomainError(f"counter {term}: a value is a whole number, not {value!r}")
+        return term.set(value)
+    raise DomainError(f"assign: {term!r} is neither a state variable nor a counter term")
 
 
 def when(cond: Formula, *effects: Effect) -> When:
@@ -175,9 +423,10 @@ class Operator:
     effects: tuple[Effect, ...]
     cost: int | float
     done: Formula | None
+    types: TypeHierarchy | None = field(default=None, repr=False)
 
     def __call__(self, *args: Term) -> TaskRef:
-        _check_args("action", self.name, self.params, args)
+        _check_args("action", self.name, self.params, args, self.types)
         return TaskRef(self.name, tuple(args))
 
 
@@ -186,9 +435,10 @@ class AbstractTask:
     name: str
     params: tuple[Var, ...]
     done: Formula | None
+    types: TypeHierarchy | None = field(default=None, repr=False)
 
     def __call__(self, *args: Term) -> TaskRef:
-        _check_args("task", self.name, self.params, args)
+        _check_args("task", self.name, self.params, args, self.types)
         return TaskRef(self.name, tuple(args))
 
 
@@ -231,6 +481,7 @@ class AgentModel:
     operators: dict[str, Operator] = field(default_factory=dict)
     tasks: dict[str, AbstractTask] = field(default_factory=dict)
     methods: list[Method] = field(default_factory=list)
+    types: TypeHierarchy | None = field(default=None, repr=False)  # the domain's, for checks
 
     def _fresh(self, name: str) -> None:
         if name in self.operators or name in self.tasks:
@@ -249,7 +500,7 @@ class AgentModel:
         self._fresh(name)
         if cost <= 0:
             raise DomainError(f"{self.agent}.{name}: cost must be positive, got {cost}")
-        op = Operator(name, tuple(params), pre, tuple(effects), cost, done)
+        op = Operator(name, tuple(params), pre, tuple(effects), cost, done, self.types)
         _check_scope(f"action {name}", set(params), [pre, *([done] if done else [])])
         # an effect with a variable the action does not bind could only fail when grounded
         loose = _effect_vars(f"action {name}", op.effects) - set(params)
@@ -263,7 +514,7 @@ class AgentModel:
     def task(self, name: str, *params: Var, done: Formula | None = None) -> AbstractTask:
         """Declare an abstract task; ``done`` lets the agent skip it when it already holds."""
         self._fresh(name)
-        t = AbstractTask(name, tuple(params), done)
+        t = AbstractTask(name, tuple(params), done, self.types)
         if done is not None:
             _check_scope(f"task {name}", set(params), [done])
         self.tasks[name] = t
@@ -302,7 +553,7 @@ class AgentModel:
     def copy(self, agent: str | None = None) -> AgentModel:
         """A shallow copy, e.g. to start the human's estimate of the robot's model."""
         return AgentModel(agent or self.agent, dict(self.operators), dict(self.tasks),
-                          list(self.methods))
+                          list(self.methods), self.types)
 
 
 def _order_pairs(where: str, order: Iterable[tuple[int, int]],
@@ -348,7 +599,13 @@ def _effect_vars(where: str, effects: Iterable[object]) -> set[Var]:
     """The variables ``effects`` leave free; anything that is not an effect is a DomainError."""
     out: set[Var] = set()
     for e in effects:
-        if isinstance(e, Atom):
+        cond = e.arg if isinstance(e, Not) else e
+        if isinstance(cond, Is):
+            raise DomainError(f"{where}: {e} is a condition, not an effect; to change the "
+                              f"variable write {Atom(cond.pred, cond.args[:-1])}.set(value)")
+        if isinstance(e, Assign):
+            out |= {a for a in (*e.args, e.value) if isinstance(a, Var)}
+        elif isinstance(e, Atom):
             out |= free_vars(e)
         elif isinstance(e, Not) and isinstance(e.arg, Atom):
             out |= free_vars(e.arg)
@@ -374,11 +631,14 @@ class Domain:
         self.robot_name = robot
         self.human_name = human
         self.types: list[str] = [AGENT_TYPE]
+        self.hierarchy = TypeHierarchy()
         self.constants: dict[str, str] = {robot: AGENT_TYPE, human: AGENT_TYPE}
         self.predicates: dict[str, Predicate] = {}
+        self.variables: dict[str, StateVariable] = {}
+        self.counters: dict[str, Counter] = {}
         self.derived_predicates: dict[str, Derived] = {}
-        self.robot = AgentModel(robot)
-        self.human = AgentModel(human)
+        self.robot = AgentModel(robot, types=self.hierarchy)
+        self.human = AgentModel(human, types=self.hierarchy)
         self._robot_seen_by_human: AgentModel | None = None
         self.copresence: Formula = TRUE
         self.goal: Formula | None = None
@@ -392,11 +652,30 @@ class Domain:
     def robot_seen_by_human(self, model: AgentModel) -> None:
         self._robot_seen_by_human = model
 
-    def type(self, name: str) -> str:
+    def type(self, name: str, parent: str | None = None) -> str:
+        """Declare a type; with ``parent`` (declared before), every object of this type is
+        also one of the parent's: ``d.type("cube", parent="object")``. The built-in type
+        ``agent`` may be given a parent once: ``d.type("agent", parent="place")``."""
+        if parent is not None:
+            if parent not in self.types:
+                raise DomainError(f"type {name}: unknown parent type {parent!r}; declare it "
+                                  f"first with d.type({parent!r})")
+            if self.hierarchy.is_sub(parent, name):
+                raise DomainError(f"type {name}: {parent} is {self.hierarchy.a(parent)}, so "
+                                  f"{name} cannot be a subtype of it")
         if name in self.types:
+            if name == AGENT_TYPE and parent is not None and name not in self.hierarchy.parent:
+                self.hierarchy.parent[name] = parent
+                return name
             raise DomainError(f"type {name!r} is declared twice")
         self.types.append(name)
+        if parent is not None:
+            self.hierarchy.parent[name] = parent
         return name
+
+    def is_subtype(self, t: str, of: str) -> bool:
+        """Whether type ``t`` is ``of`` or one of its subtypes."""
+        return self.hierarchy.is_sub(t, of)
 
     def constant(self, name: str, type: str) -> str:
         """An object every problem of this domain has (e.g. a named table)."""
@@ -418,19 +697,59 @@ class Domain:
                 raise DomainError(f"predicate {name}: unknown type {p.type!r}")
         obs = observability or observable()
         _check_scope(f"visibility of {name}", set(params), [obs.when])
-        pred = Predicate(name, tuple(params), obs)
+        pred = Predicate(name, tuple(params), obs, self.hierarchy)
         self.predicates[name] = pred
         return pred
+
+    def variable(self, name: str, *params: Var, values: str | Var,
+                 observability: Observability | None = None) -> StateVariable:
+        """Declare a finite-domain state variable: ``loc(c)`` has exactly one value among the
+        objects of type ``values`` (subtypes included) in every state. ``values`` may be a
+        typed ``Var`` naming the value, for a visibility condition that depends on it:
+        ``d.variable("pasta_at", values=p, observability=observable(at(H, p)))`` (the human
+        sees whether the pasta is where it stands). Observable always unless told otherwise."""
+        self._fresh_pred(name)
+        value = values if isinstance(values, Var) else Var("value", values)
+        if not isinstance(value.type, str) or value.type not in self.types:
+            raise DomainError(f"variable {name}: unknown value type {value.type!r}")
+        for p in params:
+            if p.type not in self.types:
+                raise DomainError(f"variable {name}: unknown type {p.type!r}")
+        if value in params:
+            raise DomainError(f"variable {name}: the value {value.name} is also a parameter")
+        obs = observability or observable()
+        _check_scope(f"visibility of {name}", {*params, value}, [obs.when])
+        v = StateVariable(name, tuple(params), value, obs, self.hierarchy)
+        self.variables[name] = v
+        return v
+
+    def counter(self, name: str, *params: Var, max: int,
+                observability: Observability | None = None) -> Counter:
+        """Declare a bounded counter ``balls(b) ∈ 0..max`` (stored in binary, one atom per
+        bit); 0 unless the problem's ``[init]`` says otherwise. Observable always unless told
+        otherwise; the visibility condition may use the counter's parameters."""
+        self._fresh_pred(name)
+        if isinstance(max, bool) or not isinstance(max, int) or max < 1:
+            raise DomainError(f"counter {name}: max must be a whole number >= 1, got {max!r}")
+        for p in params:
+            if p.type not in self.types:
+                raise DomainError(f"counter {name}: unknown type {p.type!r}")
+        obs = observability or observable()
+        _check_scope(f"visibility of {name}", set(params), [obs.when])
+        c = Counter(name, tuple(params), max, obs, self.hierarchy)
+        self.counters[name] = c
+        return c
 
     def derived(self, name: str, params: Sequence[Var], body: Formula) -> Derived:
         self._fresh_pred(name)
         _check_scope(f"derived predicate {name}", set(params), [body])
-        d = Derived(name, tuple(params), body)
+        d = Derived(name, tuple(params), body, self.hierarchy)
         self.derived_predicates[name] = d
         return d
 
     def _fresh_pred(self, name: str) -> None:
-        if name in self.predicates or name in self.derived_predicates:
+        if (name in self.predicates or name in self.derived_predicates
+                or name in self.variables or name in self.counters):
             raise DomainError(f"predicate {name!r} is declared twice")
 
     def check(self) -> None:
@@ -449,8 +768,10 @@ class Domain:
 
     def _variables(self) -> Iterable[tuple[str, Var]]:
         def of(where: str, f: object) -> Iterable[tuple[str, Var]]:
-            if isinstance(f, Atom):
+            if isinstance(f, Atom | Cmp):
                 yield from ((where, a) for a in f.args if isinstance(a, Var))
+            elif isinstance(f, Assign):
+                yield from ((where, a) for a in (*f.args, f.value) if isinstance(a, Var))
             elif isinstance(f, Eq):
                 yield from ((where, a) for a in (f.left, f.right) if isinstance(a, Var))
             elif isinstance(f, Not):
@@ -477,6 +798,10 @@ class Domain:
             yield from of(f"derived predicate {d.name}", d.body)
         for p in self.predicates.values():
             yield from of(f"visibility of {p.name}", p.observability.when)
+        valued: list[StateVariable | Counter] = [*self.variables.values(),
+                                                  *self.counters.values()]
+        for sv in valued:
+            yield from of(f"visibility of {sv.name}", sv.observability.when)
         for m in (self.robot, self.human, self.robot_seen_by_human):
             for op in m.operators.values():
                 where = f"{m.agent}: action {op.name}"

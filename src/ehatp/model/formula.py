@@ -77,6 +77,40 @@ class Eq(Formula):
 
 
 @dataclass(frozen=True, slots=True)
+class Is(Atom):
+    """``v(args) = value``: a finite-domain state variable has this value. It is the atom
+    ``v(args, value)`` of the variable's *value view* (the value is the last argument), so
+    everything that reads atoms reads it; it prints as the domain writes it."""
+
+    def __str__(self) -> str:
+        head = Atom(self.pred, self.args[:-1])
+        return f"{head} = {term_str(self.args[-1])}"
+
+
+CMP_OPS = ("==", "!=", "<", "<=", ">", ">=")
+
+
+@dataclass(frozen=True, slots=True)
+class Cmp(Formula):
+    """``c(args) op k``: a bounded-integer counter compared with a whole number."""
+
+    counter: str
+    args: tuple[Term, ...]
+    op: str
+    k: int
+
+    def __str__(self) -> str:
+        head = Atom(self.counter, self.args)
+        return f"{head} {'=' if self.op == '==' else self.op} {self.k}"
+
+    def holds(self, value: int) -> bool:
+        """Whether ``value op k``."""
+        op, k = self.op, self.k
+        return {"==": value == k, "!=": value != k, "<": value < k, "<=": value <= k,
+                ">": value > k, ">=": value >= k}[op]
+
+
+@dataclass(frozen=True, slots=True)
 class Not(Formula):
     arg: Formula
 
@@ -161,7 +195,23 @@ def forall(vars: Var | Sequence[Var], body: Formula) -> Formula:
     return Forall(tuple([vars] if isinstance(vars, Var) else vars), body)
 
 
-def eq(a: Term, b: Term) -> Formula:
+class ValueTerm:
+    """A state-variable or counter term (``loc(c)``, ``balls(b)``): what ``eq`` compares
+    with a value (see :mod:`ehatp.model.domain`)."""
+
+    __slots__ = ()
+
+    def eq(self, value: Term | int) -> Formula:
+        raise NotImplementedError
+
+
+def eq(a: Term | ValueTerm, b: Term | int) -> Formula:
+    """``a = b``: two objects (a parameter and an object, or two parameters), or a state
+    variable and a value (``eq(loc(c), mt)``), or a counter and a number (``eq(balls(b), 2)``)."""
+    if isinstance(a, ValueTerm):
+        return a.eq(b)
+    if isinstance(b, int):
+        raise TypeError(f"eq({term_str(a)}, {b}): a number compares only with a counter")
     return Eq(a, b)
 
 
@@ -169,7 +219,7 @@ def eq(a: Term, b: Term) -> Formula:
 
 
 def free_vars(f: Formula) -> set[Var]:
-    if isinstance(f, Atom):
+    if isinstance(f, Atom | Cmp):
         return {a for a in f.args if isinstance(a, Var)}
     if isinstance(f, Eq):
         return {a for a in (f.left, f.right) if isinstance(a, Var)}
@@ -214,14 +264,29 @@ class GAtom(Formula):
         return self.name
 
 
+@dataclass(frozen=True, slots=True)
+class GTest(Formula):
+    """A ground test over several fluent atoms that reads as one condition, e.g. a counter
+    comparison ``balls(b1) >= 2`` over the counter's bits: ``body`` is what it compiles to,
+    ``name`` how it prints. It is never split into its atoms (an ``ask`` asks it whole)."""
+
+    body: Formula
+    name: str
+
+    def __str__(self) -> str:
+        return self.name
+
+
 def ground(
     f: Formula,
     binding: Mapping[Var, str],
     objects: Mapping[str, Sequence[str]],
     atom: Callable[[str, tuple[str, ...]], Formula],
+    compare: Callable[[str, tuple[str, ...], str, int], Formula] | None = None,
 ) -> Formula:
     """Substitute ``binding``, expand quantifiers over ``objects`` (by type) and let ``atom``
-    turn each ground atom into TRUE, FALSE, a GAtom or a (ground) formula; then simplify."""
+    turn each ground atom into TRUE, FALSE, a GAtom or a (ground) formula, and ``compare``
+    each ground counter comparison (counter, args, op, k); then simplify."""
 
     def term(t: Term, b: Mapping[Var, str]) -> str:
         if isinstance(t, Var):
@@ -243,7 +308,11 @@ def ground(
             parts = [go(f.body, {**b, **dict(zip(f.vars, vals, strict=True))})
                      for vals in product([objects[v.type] for v in f.vars])]
             return simplify_or(parts) if isinstance(f, Exists) else simplify_and(parts)
-        if isinstance(f, GAtom):
+        if isinstance(f, Cmp):
+            if compare is None:
+                raise TypeError(f"no counters here: {f}")
+            return compare(f.counter, tuple(term(a, b) for a in f.args), f.op, f.k)
+        if isinstance(f, GAtom | GTest):
             return f
         raise TypeError(f"not a formula: {f!r}")
 
@@ -300,6 +369,8 @@ def ground_atoms(f: Formula) -> set[int]:
     """Indices of the fluent atoms a ground formula mentions."""
     if isinstance(f, GAtom):
         return {f.index}
+    if isinstance(f, GTest):
+        return ground_atoms(f.body)
     if isinstance(f, Not):
         return ground_atoms(f.arg)
     if isinstance(f, And | Or):
@@ -361,6 +432,8 @@ def _literals(f: Formula) -> tuple[int, int] | None:
 def _py(f: Formula) -> str:
     if isinstance(f, GAtom):
         return f"(s >> {f.index} & 1 == 1)"
+    if isinstance(f, GTest):
+        return _py(f.body)
     if isinstance(f, Not):
         return f"(not {_py(f.arg)})"
     if isinstance(f, And):
@@ -376,8 +449,10 @@ def substitute(f: Formula, binding: Mapping[Var, str]) -> Formula:
     def t(x: Term) -> Term:
         return binding.get(x, x) if isinstance(x, Var) else x
 
-    if isinstance(f, Atom):
-        return Atom(f.pred, tuple(t(a) for a in f.args))
+    if isinstance(f, Atom):  # an Is stays an Is
+        return type(f)(f.pred, tuple(t(a) for a in f.args))
+    if isinstance(f, Cmp):
+        return Cmp(f.counter, tuple(t(a) for a in f.args), f.op, f.k)
     if isinstance(f, Eq):
         return Eq(t(f.left), t(f.right))
     if isinstance(f, Not):

@@ -10,21 +10,36 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 
-from .domain import AgentModel, Domain, DomainError, Effect, ForEach, Method, TaskRef, When
+from .domain import (
+    AgentModel,
+    Assign,
+    Domain,
+    DomainError,
+    Effect,
+    ForEach,
+    Method,
+    TaskRef,
+    When,
+    signature,
+)
 from .formula import (
     FALSE,
     TRUE,
     And,
     Atom,
+    Cmp,
     Formula,
     GAtom,
+    GTest,
     Not,
     StateFn,
     Var,
     compile_ground,
     ground,
+    negate,
     product,
     simplify_and,
+    simplify_or,
     substitute,
 )
 from .problem import Cost, Problem, call_str
@@ -106,6 +121,14 @@ class Grounded:
     goal: StateFn
     fns: dict[Formula, StateFn]
     display: dict[Formula, str]
+    # finite-domain variables (one-hot: one bit per value, exactly one set) and counters
+    # (binary: one bit per power of two), each a *unit* of several bits (docs/semantics.md §2)
+    var_units: tuple[int, ...] = ()
+    counter_units: tuple[int, ...] = ()
+    unit_names: dict[int, str] = field(default_factory=dict)  # unit mask -> "loc(r)"
+    counter_max: dict[int, int] = field(default_factory=dict)  # counter mask -> max
+    multi_mask: int = 0  # the bits of every variable and counter
+    unit_of: dict[int, int] = field(default_factory=dict)  # bit index -> its unit's mask
 
     def compile(self, f: Formula) -> StateFn:
         fn = self.fns.get(f)
@@ -113,8 +136,88 @@ class Grounded:
             fn = self.fns[f] = compile_ground(f)
         return fn
 
+    # -- units: a plain atom is one bit; a variable or a counter is all of its bits --
+    def unit(self, i: int) -> int:
+        """The mask of the unit bit ``i`` belongs to (§2)."""
+        return self.unit_of.get(i, 1 << i)
+
+    def expand(self, m: int) -> int:
+        """``m`` with every variable and counter it touches made whole."""
+        if not m & self.multi_mask:
+            return m
+        for i in _bits(m & self.multi_mask):
+            m |= self.unit_of[i]
+        return m
+
+    def units(self, m: int) -> list[int]:
+        """The (whole) units ``m`` touches, by their lowest bit."""
+        if not m & self.multi_mask:
+            return [1 << i for i in _bits(m)]
+        out: list[int] = []
+        seen = 0
+        for i in _bits(m):
+            if not seen >> i & 1:
+                u = self.unit(i)
+                seen |= u
+                out.append(u)
+        return out
+
+    def is_counter(self, unit: int) -> bool:
+        return unit in self.counter_max
+
+    def counter_value(self, s: int, unit: int) -> int:
+        """The value of the counter ``unit`` in ``s``."""
+        return (s & unit) >> _low(unit)
+
+    def fact(self, s: int, unit: int) -> str:
+        """What ``s`` says of a multi-bit unit: ``loc(r) = mt``, ``balls(b1) = 2``."""
+        if unit in self.counter_max:
+            return f"{self.unit_names[unit]} = {self.counter_value(s, unit)}"
+        on = s & unit
+        return self.atoms[_low(on)] if on else f"{self.unit_names[unit]} = ?"
+
+    def unit_name(self, unit: int) -> str:
+        """A unit's name: the atom, or the variable or counter (``loc(r)``)."""
+        return self.unit_names.get(unit) or self.atoms[_low(unit)]
+
+    def literal(self, t: int, unit: int) -> str:
+        """``unit`` as ``t`` has it: ``a`` / ``not a`` for an atom, else its value (§5)."""
+        if unit in self.unit_names:
+            return self.fact(t, unit)
+        name = self.atoms[_low(unit)]
+        return name if t & unit else f"not {name}"
+
+    def literals(self, t: int, m: int) -> list[str]:
+        """Every unit ``m`` touches as ``t`` has it, by index (divergences, informs)."""
+        return [self.literal(t, u) for u in self.units(m)]
+
+    def world_diff(self, s: int, t: int) -> dict[str, list[str]]:
+        """How world ``s`` differs from the truth ``t``: the atoms (and a variable's or
+        counter's value in ``s``) true in ``s`` only, and those (with ``t``'s values) true in
+        ``t`` only."""
+        if not self.counter_units:
+            return {"true": self.mask_atoms(s & ~t), "false": self.mask_atoms(t & ~s)}
+        plain = ~self.counter_mask()
+        diff = [u for u in self.counter_units if (s ^ t) & u]
+        lo = [_low(u) for u in diff]
+        return {"true": _merge(self, s & ~t & plain, [(i, self.fact(s, u))
+                                                     for i, u in zip(lo, diff, strict=True)]),
+                "false": _merge(self, t & ~s & plain, [(i, self.fact(t, u))
+                                                      for i, u in zip(lo, diff, strict=True)])}
+
+    def counter_mask(self) -> int:
+        m = 0
+        for u in self.counter_units:
+            m |= u
+        return m
+
     def state_atoms(self, s: int) -> list[str]:
-        return [self.atoms[i] for i in _bits(s)]
+        """The true atoms of ``s``, with each variable's value (it is one of its bits) and
+        each counter's value (``balls(b1) = 2``, 0 included)."""
+        if not self.counter_units:
+            return [self.atoms[i] for i in _bits(s)]
+        return _merge(self, s & ~self.counter_mask(),
+                      [(_low(u), self.fact(s, u)) for u in self.counter_units])
 
     def mask_atoms(self, m: int) -> list[str]:
         return [self.atoms[i] for i in _bits(m)]
@@ -125,6 +228,16 @@ class Grounded:
             if fn(t):
                 m |= mask
         return m
+
+
+def _low(m: int) -> int:
+    """The index of the lowest set bit of ``m`` (> 0)."""
+    return (m & -m).bit_length() - 1
+
+
+def _merge(g: Grounded, m: int, extra: list[tuple[int, str]]) -> list[str]:
+    """The names of ``m``'s bits and the ``extra`` (index, text) entries, by index."""
+    return [name for _, name in sorted([*((i, g.atoms[i]) for i in _bits(m)), *extra])]
 
 
 def _bits(m: int) -> Iterable[int]:
@@ -154,7 +267,9 @@ class _Grounder:
         self.check = check or _no_check
         self.d: Domain = problem.domain
         self.objects = problem.all_objects()
-        self.obj_type = {o: t for t, os in self.objects.items() for o in os}
+        # each object's own type (a subtype's objects are in their parents' lists too)
+        self.obj_type = {**self.d.constants,
+                         **{o: t for t, os in problem.objects.items() for o in os}}
         self.fns: dict[Formula, StateFn] = {}
         # ground formula -> how the domain wrote it (derived predicates kept by name)
         self.display: dict[Formula, str] = {}
@@ -171,40 +286,82 @@ class _Grounder:
                 fluent |= _effect_preds(op.effects)
         for w in p.beliefs:
             fluent |= {a[0] for a in w.true | w.false}
-        self.static = {n for n in d.predicates if n not in fluent}
+        # predicates, state variables and counters share one namespace, sorted by name
+        names = sorted({*d.predicates, *d.variables, *d.counters})
+        self.static = {n for n in names if n not in fluent}
         atoms: list[str] = []
-        for name in sorted(d.predicates):
+        # a variable is one bit per value (one-hot), a counter one bit per power of two
+        self.value_index: dict[str, int] = {}  # value view "loc(r, mt)" -> its bit
+        self.counter_at: dict[str, int] = {}  # "balls(b1)" -> the counter's mask
+        self.unit_mask: dict[int, int] = {}  # bit index -> its variable's or counter's mask
+        units: list[tuple[str, str, int, int]] = []  # (kind, name, mask, max)
+        for name in names:
             if name in self.static:
                 continue
-            pred = d.predicates[name]
-            for args in product([self.objects[v.type] for v in pred.params]):
-                atoms.append(call_str(name, args))
+            if name in d.predicates:
+                for args in product([self.objects[v.type] for v in d.predicates[name].params]):
+                    atoms.append(call_str(name, args))
+                continue
+            sv = d.variables.get(name)
+            params = sv.params if sv is not None else d.counters[name].params
+            for args in product([self.objects[v.type] for v in params]):
+                head, lo = call_str(name, args), len(atoms)
+                if sv is not None:
+                    if not self.objects[sv.values]:
+                        raise DomainError(f"variable {head} has no value: there is no "
+                                          f"{sv.values}")
+                    for val in self.objects[sv.values]:
+                        self.value_index[call_str(name, (*args, val))] = len(atoms)
+                        atoms.append(f"{head} = {val}")
+                    top = 0
+                else:
+                    top = d.counters[name].max
+                    atoms.extend(f"{head}[{1 << j}]" for j in range(top.bit_length()))
+                mask = (1 << len(atoms)) - (1 << lo)
+                self.unit_mask.update(dict.fromkeys(range(lo, len(atoms)), mask))
+                units.append(("counter" if sv is None else "variable", head, mask, top))
+                if sv is None:
+                    self.counter_at[head] = mask
         self.atoms = atoms
         self.atom_index = {a: i for i, a in enumerate(atoms)}
-        init_strs = {call_str(n, a) for n, a in p.init}
-        self.init_static = {s for s in init_strs if s.split("(")[0] in self.static}
-        init = self.bits(s for s in init_strs if s in self.atom_index)
+        self.atom_index.update(self.value_index)  # loc(r, mt) reads as loc(r) = mt
+        self.init_static = {call_str(n, a) for n, a in p.init if n in self.static}
+        self.init_counter = {call_str(n, a[:-1]): int(a[-1]) for n, a in p.init
+                             if n in self.static and n in d.counters}
+        init = 0
+        for n, a in p.init:
+            if n not in self.static:
+                init = self.put(init, n, a)
 
         # observability: group ground atoms by their ground visibility formula
         groups: dict[Formula, int] = {}
         obs = inf = hid = 0
-        for name in sorted(d.predicates):
+        for name in names:
             if name in self.static:
                 continue
-            pred = d.predicates[name]
-            for args in product([self.objects[v.type] for v in pred.params]):
-                bit = 1 << self.atom_index[call_str(name, args)]
-                kind = pred.observability.kind
-                if kind == "observable":
-                    obs |= bit
-                    f = self.ground_f(pred.observability.when, dict(zip(pred.params, args,
-                                                                          strict=True)))
-                    if f != FALSE:
-                        groups[f] = groups.get(f, 0) | bit
-                elif kind == "inferable":
-                    inf |= bit
-                else:
-                    hid |= bit
+            decl = d.predicates.get(name) or d.variables.get(name) or d.counters[name]
+            kind = decl.observability.kind
+            for args in product([self.objects[v.type] for v in decl.params]):
+                b = dict(zip(decl.params, args, strict=True))
+                if name in d.predicates:
+                    cases = [(b, 1 << self.atom_index[call_str(name, args)])]
+                elif name in d.variables:  # per value: the condition may name the value
+                    sv = d.variables[name]
+                    cases = [({**b, sv.value: val},
+                              1 << self.value_index[call_str(name, (*args, val))])
+                             for val in self.objects[sv.values]]
+                else:  # a counter is seen whole
+                    cases = [(b, self.counter_at[call_str(name, args)])]
+                for binding, bits in cases:
+                    if kind == "observable":
+                        obs |= bits
+                        f = self.ground_f(decl.observability.when, binding)
+                        if f != FALSE:
+                            groups[f] = groups.get(f, 0) | bits
+                    elif kind == "inferable":
+                        inf |= bits
+                    else:
+                        hid |= bits
         visible = [(self.compile(f), m) for f, m in groups.items()]
 
         # tasks and models
@@ -216,7 +373,9 @@ class _Grounder:
         beliefs = []
         belief_agendas = [r_ag]
         for w in p.beliefs:
-            s = init | self.bits(call_str(*a) for a in w.true)
+            s = init
+            for n, a in sorted(w.true):
+                s = self.put(s, n, a)
             s &= ~self.bits(call_str(*a) for a in w.false)
             ag = self.agenda(w.robot_agenda) if w.robot_agenda is not None else r_ag
             belief_agendas.append(ag)
@@ -239,7 +398,24 @@ class _Grounder:
             observable_mask=obs, inferable_mask=inf, hidden_mask=hid, copresent_f=cop_f,
             copresent=self.compile(cop_f), goal_f=goal_f, goal=self.compile(goal_f), fns=self.fns,
             display=self.display,
+            var_units=tuple(m for k, _, m, _ in units if k == "variable"),
+            counter_units=tuple(m for k, _, m, _ in units if k == "counter"),
+            unit_names={m: head for _, head, m, _ in units},
+            counter_max={m: top for k, _, m, top in units if k == "counter"},
+            multi_mask=sum(m for _, _, m, _ in units),
+            unit_of=self.unit_mask,
         )
+
+    def put(self, s: int, name: str, args: tuple[str, ...]) -> int:
+        """``s`` with the fact ``name(args)`` made true: an atom set; a variable given the
+        value ``args[-1]``; a counter given the number ``args[-1]``."""
+        if name in self.d.variables:
+            idx = self.value_index[call_str(name, args)]
+            return (s & ~self.unit_mask[idx]) | 1 << idx
+        if name in self.d.counters:
+            unit = self.counter_at[call_str(name, args[:-1])]
+            return (s & ~unit) | int(args[-1]) << _low(unit)
+        return s | 1 << self.atom_index[call_str(name, args)]
 
     def bits(self, names: Iterable[str]) -> int:
         b = 0
@@ -254,9 +430,25 @@ class _Grounder:
         return fn
 
     def atom(self, pred: str, args: tuple[str, ...]) -> Formula:
+        if pred in self.d.counters:  # balls(b1, 2), the value view: balls(b1) = 2
+            c = self.d.counters[pred]
+            if len(args) != len(c.params) + 1 or not args[-1].isdigit():
+                raise DomainError(f"{call_str(pred, args)}: write a counter's value as "
+                                  f"{pred}(...) = k")
+            return self.compare(pred, args[:-1], "==", int(args[-1]))
         for a in args:
             if a not in self.obj_type:
                 raise DomainError(f"{pred}({', '.join(args)}): unknown object {a!r}")
+        if pred in self.d.variables:  # loc(r, mt), the value view: loc(r) = mt
+            name = call_str(pred, args)
+            if pred in self.static:
+                return TRUE if name in self.init_static else FALSE
+            idx = self.value_index.get(name)
+            if idx is None:
+                sv = self.d.variables[pred]
+                raise DomainError(f"{Atom(pred, args[:-1])} = {args[-1]}: an argument or the "
+                                  f"value has the wrong type (values are {sv.values}s)")
+            return GAtom(idx, self.atoms[idx])
         dv = self.d.derived_predicates.get(pred)
         if dv is not None:  # grounded once per arguments (can_put(c, b) is in many formulas)
             key = (pred, args)
@@ -275,8 +467,29 @@ class _Grounder:
             raise DomainError(f"{name}: an argument has the wrong type")
         return GAtom(idx, name)
 
+    def compare(self, name: str, args: tuple[str, ...], op: str, k: int) -> Formula:
+        """The ground counter comparison ``name(args) op k``: a test over the counter's bits
+        (values above its max never occur), printed as written; TRUE or FALSE if decided."""
+        c = self.d.counters.get(name)
+        if c is None:
+            raise DomainError(f"unknown counter {name!r}")
+        for a in args:
+            if a not in self.obj_type:
+                raise DomainError(f"{call_str(name, args)}: unknown object {a!r}")
+        key = call_str(name, args)
+        test = Cmp(name, args, op, k)
+        if name in self.static:
+            return TRUE if test.holds(self.init_counter.get(key, 0)) else FALSE
+        unit = self.counter_at.get(key)
+        if unit is None:
+            raise DomainError(f"{key}: an argument has the wrong type")
+        lo = _low(unit)
+        bits = [GAtom(lo + j, self.atoms[lo + j]) for j in range(c.max.bit_length())]
+        body = value_in(bits, {v for v in range(c.max + 1) if test.holds(v)}, c.max)
+        return body if body in (TRUE, FALSE) else GTest(body, str(test))
+
     def ground_f(self, f: Formula, binding: Mapping[Var, str]) -> Formula:
-        return ground(f, binding, self.objects, self.atom)
+        return ground(f, binding, self.objects, self.atom, self.compare)
 
     def shown(self, f: Formula, binding: Mapping[Var, str]) -> Formula:
         """Ground ``f`` and remember how each conjunct reads in the domain's vocabulary."""
@@ -375,8 +588,12 @@ class _Grounder:
         if decl is None:
             raise DomainError(f"{model.agent}: subtask {st.name!r} is neither a task nor an action")
         for a, v in zip(args, decl.params, strict=True):
-            if self.obj_type.get(a) != v.type:
-                raise DomainError(f"{model.agent}: subtask {st}: {a!r} is not a {v.type}")
+            t = self.obj_type.get(a)
+            if t is None or not self.d.is_subtype(t, v.type):
+                kind = f"is {self.d.hierarchy.a(t)}" if t is not None else "is no object"
+                raise DomainError(f"{model.agent}: subtask {st}: {a!r} {kind}; "
+                                  f"{signature(decl.name, decl.params)} wants "
+                                  f"a {v.type} for {v.name}")
 
     def effects(self, effs: Sequence[Effect], b: Mapping[Var, str],
                 cond: Formula) -> tuple[int, int, list[tuple[StateFn, int, int]]]:
@@ -387,6 +604,9 @@ class _Grounder:
                 atom = e if isinstance(e, Atom) else e.arg
                 if not isinstance(atom, Atom):
                     raise DomainError(f"effect {e} is not an atom or its negation")
+                if atom.pred in self.d.variables or atom.pred in self.d.counters:
+                    raise DomainError(f"effect {e}: {atom.pred} has a value; change it with "
+                                      f"{atom.pred}(...).set(...)")
                 g = self.ground_f(atom, b)
                 if not isinstance(g, GAtom):
                     raise DomainError(f"effect {e}: {atom.pred} is not a fluent predicate")
@@ -413,9 +633,70 @@ class _Grounder:
                     add |= a2
                     dele |= d2
                     conds.extend(c2)
+            elif isinstance(e, Assign):
+                unit, sets = self.assignment(e, b)
+                for c_f, bits in sets:
+                    c = simplify_and([cond, c_f])
+                    if c == TRUE:
+                        add |= bits
+                        dele |= unit & ~bits
+                    elif c != FALSE:
+                        conds.append((self.compile(c), bits, unit & ~bits))
             else:
                 raise DomainError(f"not an effect: {e!r}")
         return add, dele & ~add, conds
+
+    def assignment(self, e: Assign, b: Mapping[Var, str]) -> tuple[int, list[tuple[Formula, int]]]:
+        """The unit an assignment changes and its (condition, new bits) cases: one for a set,
+        one per value that changes for ``+=``/``-=`` (saturating at 0 and max)."""
+        args = tuple(b[a] if isinstance(a, Var) else a for a in e.args)
+        head = call_str(e.name, args)
+        if e.name in self.d.variables:
+            val = b[e.value] if isinstance(e.value, Var) else e.value
+            idx = self.value_index.get(call_str(e.name, (*args, str(val))))
+            if idx is None:
+                sv = self.d.variables[e.name]
+                raise DomainError(f"effect {e}: {val} is not a value of {head} (a {sv.values})")
+            return self.unit_mask[idx], [(TRUE, 1 << idx)]
+        c = self.d.counters.get(e.name)
+        unit = self.counter_at.get(head)
+        if c is None or unit is None:
+            raise DomainError(f"effect {e}: {head} is not a state variable or a counter"
+                              if c is None else f"effect {e}: an argument has the wrong type")
+        lo = _low(unit)
+        if e.value is not None:
+            return unit, [(TRUE, int(e.value) << lo)]  # type: ignore[arg-type]
+        bits = [GAtom(lo + j, self.atoms[lo + j]) for j in range(c.max.bit_length())]
+        cases = []
+        for v in range(c.max + 1):
+            new = min(c.max, max(0, v + e.delta))
+            if new != v:
+                cases.append((value_in(bits, {v}, c.max), new << lo))
+        return unit, cases
+
+
+def value_in(bits: Sequence[Formula], allowed: set[int], top: int) -> Formula:
+    """A formula over a counter's ``bits`` (lowest first) that holds when its value is in
+    ``allowed``; values above ``top`` never occur, so they may go either way (Shannon
+    expansion from the highest bit, whole halves decided at once)."""
+    def go(j: int, base: int) -> Formula | None:  # values base .. base + 2**(j+1) - 1
+        vals = [v for v in range(base, base + (2 << j if j >= 0 else 1)) if v <= top]
+        if not vals:
+            return None
+        inside = [v in allowed for v in vals]
+        if all(inside):
+            return TRUE
+        if not any(inside):
+            return FALSE
+        low, high = go(j - 1, base), go(j - 1, base + (1 << j))
+        if high is None or high == low:
+            return low
+        assert low is not None
+        b = bits[j]
+        return simplify_or([simplify_and([b, high]), simplify_and([negate(b), low])])
+
+    out = go(len(bits) - 1, 0)
+    return FALSE if out is None else out
 
 
 def _exact(c: int | float) -> Cost:
@@ -430,6 +711,8 @@ def _effect_preds(effs: Iterable[Effect]) -> set[str]:
             out.add(e.pred)
         elif isinstance(e, Not) and isinstance(e.arg, Atom):
             out.add(e.arg.pred)
+        elif isinstance(e, Assign):
+            out.add(e.name)
         elif isinstance(e, When | ForEach):
             out |= _effect_preds(e.effects)
     return out

@@ -26,7 +26,8 @@ from types import ModuleType
 from typing import Any
 
 from ..errors import InputError
-from .domain import AGENT_TYPE, Domain, DomainError, is_domain_factory
+from .domain import AGENT_TYPE, Domain, DomainError, is_domain_factory, signature
+from .formula import Var
 from .options import OPTION_KEYS, Communication, HumanModel, Objective, read_options
 
 Cost = int | Fraction
@@ -95,12 +96,17 @@ class Problem:
     notes: tuple[str, ...] = ()
 
     def all_objects(self) -> dict[str, list[str]]:
-        """Objects by type, domain constants included, each list sorted by name."""
-        out: dict[str, list[str]] = {t: [] for t in self.domain.types}
+        """Objects by type, domain constants included, each list sorted by name; a type's
+        list holds its subtypes' objects too."""
+        own: dict[str, list[str]] = {t: [] for t in self.domain.types}
         for name, t in self.domain.constants.items():
-            out[t].append(name)
+            own[t].append(name)
         for t, names in self.objects.items():
-            out.setdefault(t, []).extend(names)
+            own.setdefault(t, []).extend(names)
+        out: dict[str, list[str]] = {t: [] for t in own}
+        for t, names in own.items():
+            for up in (t, *self.domain.hierarchy.ancestors(t)):
+                out.setdefault(up, []).extend(names)
         return {t: sorted(v) for t, v in out.items()}
 
     def check(self) -> None:
@@ -123,6 +129,27 @@ def parse_call(text: str) -> tuple[str, tuple[str, ...]] | None:
     if any(not re.fullmatch(r"[\w\-]+", a) for a in args):
         return None
     return m.group(1), args
+
+
+def parse_fact(text: str) -> tuple[str, tuple[str, ...]] | None:
+    """An atom, or a state variable's or counter's value in the *value view*:
+    ``"loc(r) = mt"`` and ``"loc(r, mt)"`` are both ``("loc", ("r", "mt"))``,
+    ``"balls(b1) = 2"`` is ``("balls", ("b1", "2"))``."""
+    head, eq_, value = text.partition("=")
+    if not eq_:
+        return parse_call(text)
+    c = parse_call(head)
+    value = value.strip()
+    if c is None or not re.fullmatch(r"[\w\-]+", value):
+        return None
+    return c[0], (*c[1], value)
+
+
+def fact_str(domain: Domain, name: str, args: Sequence[str]) -> str:
+    """A fact as a problem file writes it: ``loc(r) = mt`` for a variable or a counter."""
+    if name in domain.variables or name in domain.counters:
+        return f"{call_str(name, args[:-1])} = {args[-1]}"
+    return call_str(name, args)
 
 
 def call_str(name: str, args: Sequence[str]) -> str:
@@ -406,15 +433,17 @@ def loads(text: str, path: str | Path, overrides: Mapping[str, Any] | None = Non
             objects.setdefault(t, []).append(o)
 
     def atom(place: str, text: str) -> GroundAtom:
-        c = parse_call(text)
+        c = parse_fact(text)
         if c is None:
-            raise r.err(place, f"cannot read atom {text!r}", 'write it as "pred(obj, obj)"', text)
+            raise r.err(place, f"cannot read atom {text!r}", 'write it as "pred(obj, obj)", or '
+                        '"var(obj) = value" for a state variable or a counter', text)
         _check_atom(r, place, text, c[0], c[1], domain, seen)
         return c
 
     init_t = r.table(data, "init", _TABLE_KEYS["init"], required=True)
     init = frozenset(atom("[init] true", a) for a in r.strings("[init] true",
                                                                 init_t.get("true", [])))
+    _check_values(r, "[init] true", init, domain, seen)
 
     # agendas
     agents = {"robot", "human", domain.robot_name, domain.human_name}
@@ -514,26 +543,93 @@ def _int(r: _Reader, place: str, v: Any) -> int:
 def _check_atom(r: _Reader, place: str, text: str, pname: str, args: Sequence[str],
                 domain: Domain, seen: Mapping[str, str]) -> None:
     pred = domain.predicates.get(pname)
-    if pred is None:
-        hint = ("derived predicates cannot be stated, only their atoms"
-                if pname in domain.derived_predicates else
-                f"use one of: {', '.join(sorted(domain.predicates))}")
-        raise r.err(place, f"unknown predicate {pname!r}", hint, text)
-    _check_objects(r, place, text, pname, [v.type for v in pred.params], args, seen)
+    if pred is not None:
+        _check_objects(r, place, text, pname, pred.params, args, seen, domain)
+        return
+    sv = domain.variables.get(pname)
+    c = domain.counters.get(pname)
+    if sv is not None or c is not None:
+        params = sv.params if sv is not None else c.params  # type: ignore[union-attr]
+        head = f"{pname}({', '.join(p.type for p in params)})" if params else pname
+        kind = "state variable" if sv is not None else "counter"
+        if len(args) != len(params) + 1:
+            raise r.err(place, f"{pname} is a {kind}: {text!r} gives no value",
+                        f'write "{head} = value"', text)
+        if sv is not None:
+            _check_objects(r, place, text, pname, (*sv.params, sv.value), args, seen, domain)
+            return
+        assert c is not None
+        _check_objects(r, place, text, pname, c.params, args[:-1], seen, domain)
+        if not args[-1].isdigit() or int(args[-1]) > c.max:
+            raise r.err(place, f"{call_str(pname, args[:-1])} is a counter from 0 to {c.max}, "
+                        f"not {args[-1]!r}", f"give a whole number from 0 to {c.max}", text)
+        return
+    named = sorted({*domain.predicates, *domain.variables, *domain.counters})
+    hint = ("derived predicates cannot be stated, only their atoms"
+            if pname in domain.derived_predicates else f"use one of: {', '.join(named)}")
+    raise r.err(place, f"unknown predicate {pname!r}", hint, text)
 
 
-def _check_objects(r: _Reader, place: str, text: str, name: str, types: Sequence[str],
-                   args: Sequence[str], seen: Mapping[str, str]) -> None:
+def _check_objects(r: _Reader, place: str, text: str, name: str, params: Sequence[Var],
+                   args: Sequence[str], seen: Mapping[str, str], domain: Domain) -> None:
+    types = [p.type for p in params]
     if len(args) != len(types):
         raise r.err(place, f"{name} takes {len(types)} argument(s), got {len(args)} in {text!r}",
                     f"write {name}({', '.join(types)})", text)
-    for a, t in zip(args, types, strict=True):
+    h = domain.hierarchy
+    for a, p in zip(args, params, strict=True):
+        t = p.type
         if a not in seen:
             raise r.err(place, f"unknown object {a!r} in {text!r}",
                         "declare it under [objects]", text)
-        if seen[a] != t:
+        if not h.is_sub(seen[a], t):
+            if h.ancestors(seen[a]) or h.ancestors(t):  # name the hierarchy
+                raise r.err(place, f"{a!r} is {h.a(seen[a])}; {signature(name, params)} wants "
+                            f"a {t} for {p.name}", f"use an object of type {t} (or a subtype)",
+                            text)
             raise r.err(place, f"{a!r} is a {seen[a]}, but {name} expects a {t} there",
                         f"use an object of type {t}", text)
+
+
+def _values_of(domain: Domain, facts: Iterable[GroundAtom]) -> dict[tuple[str, tuple[str, ...]],
+                                                                      str]:
+    """The value each state variable and counter has in ``facts`` (value view)."""
+    return {(n, a[:-1]): a[-1] for n, a in facts if n in domain.variables or n in domain.counters}
+
+
+def _check_values(r: _Reader, place: str, facts: Iterable[GroundAtom], domain: Domain,
+                  seen: Mapping[str, str], complete: bool = True) -> None:
+    """Each state variable and counter has at most one value in ``facts``; with ``complete``
+    every state variable has one (a counter not given is 0)."""
+    given: dict[tuple[str, tuple[str, ...]], str] = {}
+    for n, a in sorted(facts):
+        if n not in domain.variables and n not in domain.counters:
+            continue
+        key = (n, a[:-1])
+        if key in given:
+            raise r.err(place, f"{call_str(*key)} is given two values, {given[key]} and "
+                        f"{a[-1]}", "give each state variable or counter one value",
+                        fact_str(domain, n, a))
+        given[key] = a[-1]
+    if not complete:
+        return
+    h = domain.hierarchy
+    for name in sorted(domain.variables):
+        sv = domain.variables[name]
+        objs = [sorted(o for o, t in seen.items() if h.is_sub(t, p.type)) for p in sv.params]
+        for args in _product(objs):
+            if (name, args) not in given:
+                vals = sorted(o for o, t in seen.items() if h.is_sub(t, sv.values))
+                example = f"{call_str(name, args)} = {vals[0] if vals else 'value'}"
+                raise r.err(place, f"the state variable {call_str(name, args)} has no value",
+                            f'give it one, e.g. "{example}"')
+
+
+def _product(domains: Sequence[Sequence[str]]) -> list[tuple[str, ...]]:
+    out: list[tuple[str, ...]] = [()]
+    for d in domains:
+        out = [(*t, x) for t in out for x in d]
+    return out
 
 
 def _task(r: _Reader, place: str, text: str, domain: Domain, who: str,
@@ -553,7 +649,7 @@ def _check_task(r: _Reader, place: str, text: str, name: str, args: Sequence[str
         known = sorted({*m.operators, *m.tasks})
         raise r.err(place, f"{m.agent} has no task or action {name!r}",
                     f"use one of: {', '.join(known)}", text)
-    _check_objects(r, place, text, name, [v.type for v in decl.params], args, seen)
+    _check_objects(r, place, text, name, decl.params, args, seen, domain)
 
 
 def _beliefs(r: _Reader, raw: Any, atom: Callable[[str, str], GroundAtom],
@@ -587,9 +683,11 @@ def _beliefs(r: _Reader, raw: Any, atom: Callable[[str, str], GroundAtom],
                                                                      w.get("true", [])))
         fa = frozenset(atom(f"{place} false", s) for s in r.strings(f"{place} false",
                                                                       w.get("false", [])))
+        _check_belief_values(r, place, tr, fa, init, domain, seen)
         for a in sorted(tr & init):
-            raise r.err(f"{place} true", f"{call_str(*a)} is already true",
-                        "list only atoms the human wrongly believes true", call_str(*a))
+            raise r.err(f"{place} true", f"{fact_str(domain, *a)} is already true",
+                        "list only atoms the human wrongly believes true",
+                        fact_str(domain, *a))
         for a in sorted(fa - init):
             raise r.err(f"{place} false", f"{call_str(*a)} is already false",
                         "list only atoms the human wrongly believes false", call_str(*a))
@@ -599,6 +697,25 @@ def _beliefs(r: _Reader, raw: Any, atom: Callable[[str, str], GroundAtom],
                            for s in r.strings(f"{place} robot_agenda", w["robot_agenda"]))
         out.append(BeliefWorld(tr, fa, agenda))
     return tuple(out)
+
+
+def _check_belief_values(r: _Reader, place: str, true: Iterable[GroundAtom],
+                         false: Iterable[GroundAtom], init: Iterable[GroundAtom],
+                         domain: Domain, seen: Mapping[str, str]) -> None:
+    """A world gives a state variable or a counter the value the human believes, under
+    ``true`` (once); ``false`` cannot say it, a value being more than "not this one"."""
+    for n, a in sorted(false):
+        if n in domain.variables or n in domain.counters:
+            raise r.err(f"{place} false", f"{fact_str(domain, n, a)}: a state variable or "
+                        "counter has one value, so the human believes another one",
+                        f'list the value it believes under true, e.g. "{call_str(n, a[:-1])} '
+                        '= ..."', fact_str(domain, n, a))
+    _check_values(r, f"{place} true", true, domain, seen, complete=False)
+    now = _values_of(domain, init)
+    for n, a in sorted(true):
+        if n in domain.counters and now.get((n, a[:-1]), "0") == str(int(a[-1])):
+            raise r.err(f"{place} true", f"{fact_str(domain, n, a)} is already true",
+                        "list only values the human wrongly believes", fact_str(domain, n, a))
 
 
 # --- the domain a problem names --------------------------------------------------------------
@@ -815,6 +932,7 @@ def check_problem(problem: Problem) -> None:
             _check_task(r, place, call_str(name, args), name, args, d, who, seen)
 
     atoms("init", problem.init)
+    _check_values(r, "init", problem.init, d, seen)
     tasks("robot_agenda", problem.robot_agenda, "robot")
     tasks("human_agenda", problem.human_agenda, "human")
     for i, w in enumerate(problem.beliefs, 1):
@@ -823,6 +941,7 @@ def check_problem(problem: Problem) -> None:
                         "write BeliefWorld(true=..., false=...)")
         atoms(f"beliefs #{i} true", w.true)
         atoms(f"beliefs #{i} false", w.false)
+        _check_belief_values(r, f"beliefs #{i}", w.true, w.false, problem.init, d, seen)
         if w.robot_agenda is not None:
             tasks(f"beliefs #{i} robot_agenda", w.robot_agenda, "robot")
     for g in problem.goal:

@@ -80,12 +80,12 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
         diffs = []
         for s in sorted({s for s, _ in es.worlds}):
             div |= s ^ t
-            diffs.append({"true": g.mask_atoms(s & ~t), "false": g.mask_atoms(t & ~s)})
+            diffs.append(g.world_diff(s, t))
         goal = gr.status[n] == GOAL
         nodes.append(PolicyNode(
             id=i, copresent=sem.copresent(t), k=es.k, worlds=len(es.worlds),
-            divergence=[(a if t >> b & 1 else f"not {a}")
-                        for b, a in ((b, g.atoms[b]) for b in bits_of(div))],
+            divergence=([g.atoms[b] if t >> b & 1 else f"not {g.atoms[b]}" for b in bits_of(div)]
+                        if not div & g.multi_mask else g.literals(t, div)),  # values whole
             world_diffs=diffs, state=g.state_atoms(t), robot_agenda=agenda(es.robot_agenda),
             human_agenda=agenda(es.human_agenda),
             to_move=None if goal else (r_name if es.turn == ROBOT else h_name),
