@@ -18,6 +18,7 @@ from .model.domain import (
     AgentModel,
     Domain,
     DomainError,
+    assign,
     domain_factory,
     for_each,
     observable,
@@ -72,4 +73,5 @@ __all__ = [
     "DomainError", "EhatpError", "ExecutionError", "Executor", "InputError", "Limits",
     "Policy", "PolicyMismatch", "Problem", "Result", "UncoveredHumanAction", "Var", "eq", "exists",
     "domain_factory", "for_each", "forall", "load", "observable", "solve", "validate", "when",
+    "assign",
 ]

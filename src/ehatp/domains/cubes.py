@@ -20,6 +20,14 @@ Options:
   goes through them in order, one ``move`` per leg (``turn`` then ``move`` per leg with
   ``turn_before_move``). A round trip then keeps the agents apart for ``2 * (N + 1)`` robot
   turns (``4 * (N + 1)`` with ``turn_before_move``), the K it needs.
+- ``encoding``: ``"atoms"`` (default, the paper's predicates) or ``"variables"``: the same
+  model with state variables (docs/modelling.md): a cube's place ``loc(c)`` is one of the
+  places -- tables, boxes and the agents' hands (``agent`` is a subtype of ``place``) --, an
+  agent's ``at(a)`` and ``facing(a)`` are tables; ``empty(b)`` and ``handempty(a)`` are derived.
+  Problems then write ``loc(r) = mt``, ``at(H) = mt`` in ``[init]``. Sight is per value: the
+  human sees whether a cube is on a table while at and facing it, in a box when the box is
+  transparent and the human at and facing ``mt``, in a hand (its own, or when co-present).
+  Plans, costs and communication are those of ``"atoms"`` (tests/test_variables.py).
 
 Our modelling choices: the placement rule ``can_put`` and the goal are derived predicates
 (printed by name in asks); ``pick`` names only the cube (the table is where the cube lies).
@@ -37,11 +45,19 @@ MT, OT = "mt", "ot"
 HUMAN_REACH = ("fetched", "any")
 
 
+ENCODINGS = ("atoms", "variables")
+
+
 @domain_factory
 def make_domain(turn_before_move: bool = False,
                 human_reach: Literal["fetched", "any"] = "fetched",
-                waypoints: int = 0) -> Domain:
-    """The cube domain; see the module docstring for the three options."""
+                waypoints: int = 0, encoding: Literal["atoms", "variables"] = "atoms") -> Domain:
+    """The cube domain; see the module docstring for the four options."""
+    if encoding not in ENCODINGS:
+        raise ValueError(f"encoding must be one of {', '.join(map(repr, ENCODINGS))}, "
+                         f"got {encoding!r}")
+    if encoding == "variables":
+        return _with_variables(turn_before_move, human_reach, waypoints)
     if human_reach not in HUMAN_REACH:
         raise ValueError(f"human_reach must be one of {', '.join(map(repr, HUMAN_REACH))}, "
                          f"got {human_reach!r}")
@@ -146,6 +162,119 @@ def make_domain(turn_before_move: bool = False,
                   subtasks=[*go(t0, MT), h_away(c)])
     else:
         hm.method(h_away, "carry", pre=holding(H, c) & at(H, OT),
+                  subtasks=[*go(OT, MT), h_away(c)])
+    return d
+
+
+def _with_variables(turn_before_move: bool, human_reach: Literal["fetched", "any"],
+                    waypoints: int) -> Domain:
+    """The same model with state variables (``encoding = "variables"``)."""
+    if human_reach not in HUMAN_REACH:
+        raise ValueError(f"human_reach must be one of {', '.join(map(repr, HUMAN_REACH))}, "
+                         f"got {human_reach!r}")
+    if isinstance(waypoints, bool) or not isinstance(waypoints, int) or waypoints < 0:
+        raise ValueError(f"waypoints must be a whole number of places, 0 or more, "
+                         f"got {waypoints!r}")
+    suffix = ("-turn" if turn_before_move else "") + ("-reach-any" if human_reach == "any" else "")
+    suffix += f"-way{waypoints}" if waypoints else ""
+    d = Domain("cubes-vars" + suffix, robot=R, human=H, doc=__doc__ or "")
+    Place = d.type("place")
+    Table, Box = d.type("table", parent=Place), d.type("box", parent=Place)
+    d.type("agent", parent=Place)  # a hand holds a cube: the agents are places too
+    Cube = d.type("cube")
+    d.constant(MT, Table)
+    d.constant(OT, Table)
+    route = [MT, *(d.constant(f"way{i}", Table) for i in range(1, waypoints + 1)), OT]
+    a, a2 = Var("a", "agent"), Var("a2", "agent")
+    p = Var("p", Place)
+    t, t0, t1, t2 = (Var(n, Table) for n in ("t", "t0", "t1", "t2"))
+    b, b2 = Var("b", Box), Var("b2", Box)
+    c, c2 = Var("c", Cube), Var("c2", Cube)
+
+    # static facts
+    origin = d.predicate("origin", c, t)
+    transparent = d.predicate("transparent", b)
+    # where the agents are and which table they face
+    at = d.variable("at", a, values=Table)
+    facing = d.variable("facing", a, values=Table)
+    copresent = exists(t, (at(R) == t) & (at(H) == t) & (facing(R) == t) & (facing(H) == t))
+    d.copresence = copresent
+    # where each cube is, seen per place: on a table while the human is at it and facing it;
+    # in a transparent box from mt; in a hand, the human's own or when co-present
+    sees = (exists(t, eq(p, t) & (at(H) == t) & (facing(H) == t))
+            | exists(b, eq(p, b) & transparent(b)) & (at(H) == MT) & (facing(H) == MT)
+            | eq(p, H) | exists(a, eq(p, a)) & copresent)
+    loc = d.variable("loc", c, values=p, observability=observable(sees))
+    empty = d.derived("empty", [b], ~exists(c, loc(c) == b))
+    handempty = d.derived("handempty", [a2], ~exists(c, loc(c) == a2))
+
+    # placement rule: cubes of one table in one box, different tables in different boxes
+    mate_in = d.derived("mate_in", [c, b], exists([c2, t], (loc(c2) == b) & origin(c2, t)
+                                                  & origin(c, t)))
+    can_put = d.derived("can_put", [c, b], forall(b2, empty(b2)) | mate_in(c, b)
+                        | (~exists(b2, mate_in(c, b2)) & empty(b)))
+    goal = d.derived("organized", [], forall(c, exists(b, loc(c) == b)) & forall(
+        [c, c2, b], ((loc(c) == b) & (loc(c2) == b)) >> exists(t, origin(c, t)
+                                                               & origin(c2, t))))
+
+    # -- robot: picks cubes on mt and boxes them --
+    rm = d.robot
+    r_pick = rm.action("pick", c, pre=(loc(c) == MT) & handempty(R), effects=[loc(c).set(R)])
+    r_place = rm.action("place", c, b, pre=(loc(c) == R) & (at(R) == MT) & can_put(c, b),
+                        effects=[loc(c).set(b)])
+    r_org = rm.task("organize", done=goal())
+    r_away = rm.task("put_away", c)
+    rm.method(r_org, "near", params=[c], pre=(loc(c) == MT) & handempty(R),
+              subtasks=[r_pick(c), r_away(c), r_org()])
+    rm.method(r_away, "box", params=[b], pre=(loc(c) == R) & can_put(c, b),
+              subtasks=[r_place(c, b)])
+
+    # -- human: fetches the cubes of other tables (all cubes with human_reach="any") --
+    reach: Formula = ~origin(c, MT) if human_reach == "fetched" else TRUE
+    hm = d.human
+    h_pick = hm.action("pick", c, pre=reach & exists(t, (at(H) == t) & (loc(c) == t))
+                       & handempty(H), effects=[loc(c).set(H)])
+    h_place = hm.action("place", c, b, pre=(loc(c) == H) & (at(H) == MT) & can_put(c, b),
+                        effects=[loc(c).set(b)])
+    if turn_before_move:
+        turn = hm.action("turn", t1, t2, pre=(facing(H) == t1) & ~eq(t1, t2),
+                         effects=[facing(H).set(t2)])
+        move = hm.action("move", t1, t2, pre=(at(H) == t1) & (facing(H) == t2) & ~eq(t1, t2),
+                         effects=[at(H).set(t2)])
+    else:
+        move = hm.action("move", t1, t2, pre=(at(H) == t1) & (facing(H) == t1) & ~eq(t1, t2),
+                         effects=[at(H).set(t2), facing(H).set(t2)])
+
+    def go(src: Var | str, dst: Var | str) -> list[TaskRef]:
+        if not waypoints:
+            return ([turn(src, dst)] if turn_before_move else []) + [move(src, dst)]
+        path = route if src == MT else route[::-1]
+        return [step for u, v in zip(path, path[1:], strict=False)
+                for step in ([turn(u, v)] if turn_before_move else []) + [move(u, v)]]
+
+    h_org = hm.task("organize", done=goal())
+    h_away = hm.task("put_away", c)
+    fetch = hm.task("fetch", c, t)
+    hm.method(h_org, "near", params=[c, t],
+              pre=reach & (at(H) == t) & (loc(c) == t) & handempty(H),
+              subtasks=[h_pick(c), h_away(c), h_org()])
+    hm.method(h_org, "far", params=[c, t],
+              pre=reach & (loc(c) == t) & (at(H) != t) & handempty(H),
+              subtasks=[fetch(c, t), h_away(c), h_org()])
+    if not waypoints:
+        hm.method(fetch, "go", params=[t0], pre=(at(H) == t0) & ~eq(t0, t),
+                  subtasks=[*go(t0, t), h_pick(c)])
+    else:
+        for src, dst in ((MT, OT), (OT, MT)):
+            hm.method(fetch, f"go_{dst}", pre=(at(H) == src) & eq(t, dst),
+                      subtasks=[*go(src, dst), h_pick(c)])
+    hm.method(h_away, "box", params=[b], pre=(loc(c) == H) & (at(H) == MT) & can_put(c, b),
+              subtasks=[h_place(c, b)])
+    if not waypoints:
+        hm.method(h_away, "carry", params=[t0], pre=(loc(c) == H) & (at(H) == t0)
+                  & ~eq(t0, MT), subtasks=[*go(t0, MT), h_away(c)])
+    else:
+        hm.method(h_away, "carry", pre=(loc(c) == H) & (at(H) == OT),
                   subtasks=[*go(OT, MT), h_away(c)])
     return d
 

@@ -123,10 +123,11 @@ class TypeHierarchy:
     def a(self, t: str) -> str:
         """``"a cube, a subtype of object"``: the type with its ancestors, for messages."""
         up = self.ancestors(t)
-        return f"{_article(t)} {t}" + (f", a subtype of {', of '.join(up)}" if up else "")
+        return f"{article(t)} {t}" + (f", a subtype of {', of '.join(up)}" if up else "")
 
 
-def _article(t: str) -> str:
+def article(t: str) -> str:
+    """``"a"`` or ``"an"`` before the type name ``t``."""
     return "an" if t[:1].lower() in "aeiou" else "a"
 
 
@@ -147,7 +148,7 @@ def _check_args(kind: str, name: str, params: Sequence[Var], args: Sequence[Term
                                        and types.is_sub(a.type, p.type)):
             if types is not None and (types.ancestors(a.type) or types.ancestors(p.type)):
                 raise DomainError(f"{kind} {name}: argument {a.name} is {types.a(a.type)}; "
-                                  f"{signature(name, params)} wants {_article(p.type)} "
+                                  f"{signature(name, params)} wants {article(p.type)} "
                                   f"{p.type} for {p.name}")
             raise DomainError(
                 f"{kind} {name}: argument {a.name} has type {a.type}, expected {p.type}"
@@ -226,8 +227,8 @@ class VarTerm(ValueTerm):
             ok = value.type == v.values or (v.types is not None
                                              and v.types.is_sub(value.type, v.values))
             if not ok:
-                raise DomainError(f"variable {self}: {value.name} is a {value.type}, but its "
-                                  f"values are {v.values}s")
+                raise DomainError(f"variable {self}: {value.name} is {article(value.type)} "
+                                  f"{value.type}, but its values are {v.values}s")
             return value
         if isinstance(value, str):
             return value

@@ -117,6 +117,8 @@ class Not(Formula):
     def __str__(self) -> str:
         if isinstance(self.arg, Eq):
             return f"{term_str(self.arg.left)} != {term_str(self.arg.right)}"
+        if isinstance(self.arg, Is):
+            return str(self.arg).replace(" = ", " != ", 1)
         return f"not {_paren(self.arg)}"
 
 

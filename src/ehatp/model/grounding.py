@@ -20,6 +20,7 @@ from .domain import (
     Method,
     TaskRef,
     When,
+    article,
     signature,
 )
 from .formula import (
@@ -593,7 +594,7 @@ class _Grounder:
                 kind = f"is {self.d.hierarchy.a(t)}" if t is not None else "is no object"
                 raise DomainError(f"{model.agent}: subtask {st}: {a!r} {kind}; "
                                   f"{signature(decl.name, decl.params)} wants "
-                                  f"a {v.type} for {v.name}")
+                                  f"{article(v.type)} {v.type} for {v.name}")
 
     def effects(self, effs: Sequence[Effect], b: Mapping[Var, str],
                 cond: Formula) -> tuple[int, int, list[tuple[StateFn, int, int]]]:

@@ -26,7 +26,7 @@ from types import ModuleType
 from typing import Any
 
 from ..errors import InputError
-from .domain import AGENT_TYPE, Domain, DomainError, is_domain_factory, signature
+from .domain import AGENT_TYPE, Domain, DomainError, article, is_domain_factory, signature
 from .formula import Var
 from .options import OPTION_KEYS, Communication, HumanModel, Objective, read_options
 
@@ -585,10 +585,10 @@ def _check_objects(r: _Reader, place: str, text: str, name: str, params: Sequenc
         if not h.is_sub(seen[a], t):
             if h.ancestors(seen[a]) or h.ancestors(t):  # name the hierarchy
                 raise r.err(place, f"{a!r} is {h.a(seen[a])}; {signature(name, params)} wants "
-                            f"a {t} for {p.name}", f"use an object of type {t} (or a subtype)",
-                            text)
-            raise r.err(place, f"{a!r} is a {seen[a]}, but {name} expects a {t} there",
-                        f"use an object of type {t}", text)
+                            f"{article(t)} {t} for {p.name}",
+                            f"use an object of type {t} (or a subtype)", text)
+            raise r.err(place, f"{a!r} is {article(seen[a])} {seen[a]}, but {name} expects "
+                        f"{article(t)} {t} there", f"use an object of type {t}", text)
 
 
 def _values_of(domain: Domain, facts: Iterable[GroundAtom]) -> dict[tuple[str, tuple[str, ...]],
