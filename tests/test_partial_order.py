@@ -216,7 +216,8 @@ def _as_validator(sem: V._Semantics, ag: tuple[object, ...]) -> V.Agenda:
 
 def test_planner_and_validator_build_and_print_networks_alike() -> None:
     """The two independent implementations of the canonical form and of printing agree on
-    random partial orders, and after refining or finishing a member."""
+    random partial orders (tasks repeat), and after refining or finishing a member; the form
+    does not depend on the order the members come in."""
     d = Domain("nets")
     for i in range(5):
         d.robot.action(f"t{i}")
@@ -228,6 +229,13 @@ def test_planner_and_validator_build_and_print_networks_alike() -> None:
     for _ in range(400):
         ms = _random_members(r)
         mine = net.normal(ms)
+        # the same network listed in another order is the same agenda (canonical)
+        perm = list(range(len(ms)))
+        r.shuffle(perm)
+        at = {old: new for new, old in enumerate(perm)}
+        shuffled = [(ms[old][0], sum(1 << at[i] for i in range(len(ms)) if ms[old][1] >> i & 1))
+                    for old in perm]
+        assert net.normal(shuffled) == mine
         pairs = {(i, j) for j, (_, m) in enumerate(ms) for i in range(len(ms)) if m >> i & 1}
         theirs = sem.canon([t for t, _ in ms], pairs)
         assert _as_validator(sem, mine) == theirs
@@ -301,3 +309,27 @@ def test_uncertain_human_anticipation_is_validated() -> None:
     r = ehatp.solve(p)
     assert r.status == "solved" and r.policy is not None
     assert ehatp.validate(p, r.policy).ok
+
+
+# -- the random generator --------------------------------------------------------------------
+
+def test_the_random_generator_draws_partial_orders() -> None:
+    """Some random problems have unordered and partially ordered methods, for either agent,
+    and planner and validator agree on them (benchmarks/agreement.py runs many more)."""
+    from ehatp.tools import randomgen
+
+    with_po = []
+    kinds: set[str] = set()
+    for seed in range(300):
+        spec = randomgen.draw(seed)
+        for who, m in (("robot", spec.robot), ("human", spec.human)):
+            for me in m.methods:
+                if me.order is not None:
+                    kinds.add(f"{who}:{'unordered' if not me.order else 'partial'}")
+        if any(me.order is not None for m in (spec.robot, spec.human) for me in m.methods):
+            with_po.append(seed)
+    assert kinds == {"robot:unordered", "robot:partial", "human:unordered", "human:partial"}
+    assert 40 <= len(with_po) <= 150
+    outcomes = [randomgen.check(seed, determinism=True) for seed in with_po[:25]]
+    assert not [o for o in outcomes if o.failed], [o for o in outcomes if o.failed]
+    assert sum(o.kind == "solved" for o in outcomes) >= 8

@@ -307,8 +307,7 @@ class _Semantics:
         """§1 (Partial order): the tasks ``tasks`` under the order ``before`` (pairs of
         positions, transitively closed) as an agenda in canonical form: cut into parts, each
         wholly before the next, as small as possible; a part of one task is that task, a larger
-        one a block, its tasks listed by name, then by the names of the tasks before them
-        (ties keep their order)."""
+        one a block, its tasks in the order of :meth:`member_order`."""
         out: list[int | Block] = []
         left = list(range(len(tasks)))
         while left:
@@ -327,16 +326,33 @@ class _Semantics:
             if len(keep) == 1:
                 out.append(tasks[keep[0]])
             else:
-                names = self.g.task_names
-                keys = {i: (names[tasks[i]], sorted(names[tasks[j]] for j in keep
-                                                    if (j, i) in before)) for i in keep}
-                order = sorted(keep, key=keys.__getitem__)
+                order = self.member_order(tasks, before, keep)
                 pos = {i: k for k, i in enumerate(order)}
                 out.append(Block(tuple(tasks[i] for i in order),
                                  frozenset((pos[i], pos[j]) for i, j in before
                                            if i in pos and j in pos)))
             left = [i for i in left if i not in part]
         return tuple(out)
+
+    def member_order(self, tasks: Sequence[int], before: set[tuple[int, int]],
+                     keep: list[int]) -> list[int]:
+        """§1: the order of a block's members: by task name; tasks of the same name in the
+        order that makes the list, member by member, of the sorted positions of the members
+        before it smallest."""
+        names = self.g.task_names
+        by_name: dict[str, list[int]] = {}
+        for i in keep:
+            by_name.setdefault(names[tasks[i]], []).append(i)
+        runs = [by_name[n] for n in sorted(by_name)]
+        best: tuple[list[tuple[int, ...]], list[int]] | None = None
+        for choice in itertools.product(*(itertools.permutations(r) for r in runs)):
+            order = [i for run in choice for i in run]
+            at = {i: k for k, i in enumerate(order)}
+            code = [tuple(sorted(at[j] for j in keep if (j, i) in before)) for i in order]
+            if best is None or code < best[0]:
+                best = (code, order)
+        assert best is not None
+        return best[1]
 
     def drop(self, b: Block, i: int) -> Agenda:
         """§1: the block once its task at position ``i`` is done."""

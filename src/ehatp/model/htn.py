@@ -15,6 +15,7 @@ as before partial order existed, and refining it takes the same path.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
+from itertools import product
 
 from .domain import DomainError
 from .formula import Formula, StateFn, negate
@@ -102,6 +103,40 @@ def _series(ms: Sequence[tuple[int, int]], ids: list[int]) -> list[list[int]]:
     return parts
 
 
+def _orderings(classes: list[list[int]], preds: list[frozenset[int]],
+               succs: list[frozenset[int]]) -> Iterable[list[int]]:
+    """Every order of the members that keeps ``classes`` (members of one name) in sequence,
+    members of a class in any order -- except that *twins* (same predecessors and successors,
+    interchangeable) keep one order among themselves, since swapping them changes nothing."""
+    def perms(cls: list[int]) -> list[list[int]]:
+        groups: dict[tuple[frozenset[int], frozenset[int]], list[int]] = {}
+        for k in cls:
+            groups.setdefault((preds[k], succs[k]), []).append(k)
+        gs = list(groups.values())
+        out: list[list[int]] = []
+
+        def go(left: list[int], seq: list[int]) -> None:  # distinct sequences of groups
+            if len(seq) == len(cls):
+                nxt = [0] * len(gs)
+                row = []
+                for g in seq:
+                    row.append(gs[g][nxt[g]])
+                    nxt[g] += 1
+                out.append(row)
+                return
+            for g, n in enumerate(left):
+                if n:
+                    left[g] -= 1
+                    go(left, [*seq, g])
+                    left[g] += 1
+
+        go([len(g) for g in gs], [])
+        return out
+
+    for parts in product(*(perms(c) if len(c) > 1 else [c] for c in classes)):
+        yield [k for part in parts for k in part]
+
+
 class Networks:
     """Canonical forms and printing of partially ordered agendas, for one list of task names
     (§1, "Partial order"). Memoised: the same block changes the same way in every state."""
@@ -126,17 +161,34 @@ class Networks:
         return tuple(out)
 
     def _block(self, ms: Members, ids: list[int]) -> Block:
+        """The members ``ids`` of ``ms`` as a block: listed by task name; where a name repeats,
+        in the order (among those by name) that makes the list of each member's sorted
+        predecessor positions smallest, so the order is the network's own (§1)."""
         names = self.names
-        inside = set(ids)
-
-        def key(i: int) -> tuple[str, list[str]]:
-            return names[ms[i][0]], sorted(names[ms[j][0]] for j in _bits(ms[i][1])
-                                           if j in inside)
-
-        order = sorted(ids, key=key)
-        pos = {i: k for k, i in enumerate(order)}
-        return Block(tuple((ms[i][0], sum(1 << pos[j] for j in _bits(ms[i][1]) if j in pos))
-                           for i in order))
+        loc = {i: k for k, i in enumerate(ids)}
+        preds = [frozenset(loc[j] for j in _bits(ms[i][1]) if j in loc) for i in ids]
+        tasks = [ms[i][0] for i in ids]
+        by_name = sorted(range(len(ids)), key=lambda k: names[tasks[k]])
+        classes: list[list[int]] = []
+        for k in by_name:
+            if classes and names[tasks[classes[-1][0]]] == names[tasks[k]]:
+                classes[-1].append(k)
+            else:
+                classes.append([k])
+        if len(classes) == len(ids):  # every name once: the order by name is the one
+            order = by_name
+        else:
+            succs = [frozenset(k for k in range(len(ids)) if j in preds[k])
+                     for j in range(len(ids))]
+            best: tuple[tuple[int, ...], ...] | None = None
+            order = by_name
+            for cand in _orderings(classes, preds, succs):
+                pos = {k: p for p, k in enumerate(cand)}
+                code = tuple(tuple(sorted(pos[j] for j in preds[k])) for k in cand)
+                if best is None or code < best:
+                    best, order = code, cand
+        pos = {k: p for p, k in enumerate(order)}
+        return Block(tuple((tasks[k], sum(1 << pos[j] for j in preds[k])) for k in order))
 
     def body(self, subtasks: tuple[int, ...], order: tuple[int, ...] | None) -> Agenda:
         """A method's subtasks as an agenda: as listed (``order`` None: totally ordered), or

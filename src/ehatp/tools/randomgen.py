@@ -31,6 +31,9 @@ What a spec draws (probabilities are per problem unless said otherwise):
   methods go on a trip (leave, up to two actions away, back, then more) with probability 0.55
   each; the human starts away (0.1), then its methods begin with ``back``. The robot's
   agenda holds 1-3 tasks, the human's 1-2.
+- **Partial order** (:data:`ORDERS`): in 0.3 of the problems, half the methods of two subtasks
+  or more get an order: none (0.3) or some of the listed order's pairs, so both agents may
+  interleave their subtasks (docs/semantics.md §1).
 - **M_R^H** is M_R itself (0.35), an equal copy (0.05), or M_R changed 1-3 times: an operator
   dropped (with the methods using it), an extra operator the robot does not have (used by an
   extra method), a method dropped or added, an operator's precondition or effects redrawn, a
@@ -190,6 +193,8 @@ class MethodSpec:
     pre: tuple[Lit, ...] = ()
     subtasks: tuple[str, ...] = ()
     free: bool = False
+    # pairs (before, after) of subtask indices; None: in the order listed (see ORDERS)
+    order: tuple[tuple[int, int], ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -265,7 +270,9 @@ class Spec:
                 out.append(f"  task {t.name}{'(?i)' if t.param else ''}{done}")
             for me in m.methods:
                 out.append(f"  method {me.task}.{me.name}{'[?i free]' if me.free else ''}: "
-                           f"pre {lits(me.pre)} -> {', '.join(me.subtasks)}")
+                           f"pre {lits(me.pre)} -> {', '.join(me.subtasks)}"
+                           + ("" if me.order is None else
+                              f" order {' '.join(f'{i}<{j}' for i, j in me.order) or 'none'}"))
             return out
 
         cop = "home" + (f" & {self.door}" if self.door else "")
@@ -672,9 +679,42 @@ def _head(call: str) -> str:
     return call.partition("(")[0]
 
 
+ORDERS = (0.3, 0.5, 0.3)
+"""Partially ordered methods: the share of problems that have some, the share of their methods
+of two subtasks or more that get an order, and the share of those left unordered (the others
+keep each pair of the listed order with probability 1/2). Drawn after everything else, from
+generators of their own (see :func:`draw_orders`), so no other draw changes."""
+
+
+def draw_orders(spec: Spec) -> Spec:
+    """``spec`` with the partial orders of :data:`ORDERS` drawn. The listed order always
+    remains allowed, so the intended run the conditions were fitted to still goes through. A
+    method of M_R^H equal to one of M_R gets the same order."""
+    share, per_method, unordered = ORDERS
+    if random.Random(f"{spec.seed}:orders").random() >= share:
+        return spec
+
+    def model(m: ModelSpec, who: str) -> ModelSpec:
+        out = []
+        for me in m.methods:
+            r = random.Random(f"{spec.seed}:order:{who}:{me.task}.{me.name}:{me.subtasks}")
+            n = len(me.subtasks)
+            if n < 2 or r.random() >= per_method:
+                out.append(me)
+                continue
+            pairs = () if r.random() < unordered else tuple(
+                (i, j) for i in range(n) for j in range(i + 1, n) if r.random() < 0.5)
+            out.append(replace(me, order=pairs))
+        return replace(m, methods=tuple(out))
+
+    seen = None if spec.robot_seen is None else model(spec.robot_seen, "robot")
+    return replace(spec, robot=model(spec.robot, "robot"), human=model(spec.human, "human"),
+                   robot_seen=seen)
+
+
 def draw(seed: int) -> Spec:
     """The spec of seed ``seed`` (deterministic)."""
-    return _Drawer(seed).spec()
+    return draw_orders(_Drawer(seed).spec())
 
 
 # --- building ---------------------------------------------------------------------------------
@@ -742,7 +782,7 @@ def build(spec: Spec, *, reverse: bool = False) -> Problem:
                 a = arg.rstrip(")")
                 subs.append(target(i if a == "?i" else a) if arg else target())
             m.method(task, me.name, params=(i,) if me.free and not task.params else (),
-                     pre=formula(me.pre), subtasks=subs)
+                     pre=formula(me.pre), subtasks=subs, order=me.order)
         return m
 
     model_of(spec.robot, d.robot)
