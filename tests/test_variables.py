@@ -369,3 +369,29 @@ def test_the_cube_domain_refuses_an_unknown_encoding() -> None:
     from ehatp.domains.cubes import make_domain
     with pytest.raises(ValueError, match="encoding must be one of 'atoms', 'variables'"):
         make_domain(encoding="bits")  # type: ignore[arg-type]
+
+
+# --- the agreement benchmark draws them ---------------------------------------------------------
+
+
+def test_the_random_generator_draws_variables_and_counters() -> None:
+    """benchmarks/agreement.py's problems include state variables (seen whole, or per value)
+    and counters, and planner and validator agree on them."""
+    from ehatp.tools import randomgen
+
+    drawn = [randomgen.draw(seed) for seed in range(1000)]
+    kinds = {(v.kind, v.sight) for s in drawn for v in s.values}
+    assert {("variable", "whole"), ("variable", "value"), ("variable", "others"),
+            ("counter", "whole")} <= kinds
+    sizes = {(v.kind, v.size) for s in drawn for v in s.values}
+    assert {("variable", 2), ("variable", 3), ("counter", 2), ("counter", 3)} <= sizes
+    # the human is sometimes wrong about the value within the atom's truth
+    assert any(w != v.init and v.holds(w) == v.holds(v.init)
+               for s in drawn for v in s.values for w in v.worlds)
+    with_values = [s.seed for s in drawn if s.values][:80]
+    p = randomgen.build(randomgen.draw(with_values[0]))
+    assert p.domain.variables or p.domain.counters
+    outcomes = randomgen.run(with_values, jobs=2)
+    bad = [f"{o.seed}: {o.kind} {o.detail}" for o in outcomes if o.failed]
+    assert not bad, bad
+    assert sum(o.kind == "solved" for o in outcomes) >= len(with_values) // 3

@@ -34,6 +34,11 @@ What a spec draws (probabilities are per problem unless said otherwise):
 - **Partial order** (:data:`ORDERS`): in 0.3 of the problems, half the methods of two subtasks
   or more get an order: none (0.3) or some of the listed order's pairs, so both agents may
   interleave their subtasks (docs/semantics.md §1).
+- **State variables and counters** (:data:`VALUES`): in 0.35 of the problems one generic atom
+  (two, 0.4) is written as a state variable over 2-3 spots (it holds when the value is ``p1``;
+  seen whole, or per value) or as a counter up to 2-3 (it holds when at least 1; an effect
+  making it true adds 1 or 2, saturating); the worlds draw values within the atom's truth, so
+  the human may also be wrong about which spot or how many (docs/semantics.md §2, §5).
 - **M_R^H** is M_R itself (0.35), an equal copy (0.05), or M_R changed 1-3 times: an operator
   dropped (with the methods using it), an extra operator the robot does not have (used by an
   extra method), a method dropped or added, an operator's precondition or effects redrawn, a
@@ -81,7 +86,7 @@ from ..model.domain import (
     observable,
     when,
 )
-from ..model.formula import TRUE, Atom, Formula, Var, conj
+from ..model.formula import TRUE, Atom, Formula, Var, conj, eq
 from ..model.options import (
     DEFAULT_TIES,
     Communication,
@@ -218,6 +223,33 @@ class WorldSpec:
 
 
 @dataclass(frozen=True)
+class ValueSpec:
+    """A generic atom written as a state variable or a counter (see :data:`VALUES`).
+
+    ``kind = "variable"``: ``atom`` is a variable over the spots ``p0..p{size-1}``; the atom
+    holds when its value is ``p1``; an effect making the atom true sets ``p1``, one making it
+    false sets ``p{off}``; ``sight`` is how the human sees it when the atom's class says it
+    does: ``"whole"``, ``"value"`` (only whether it is ``p1``) or ``"others"`` (whether it is
+    anything but ``p0``). ``kind = "counter"``: ``atom`` is a counter in ``0..size``; the atom
+    holds when it is at least 1; making it true adds ``step`` (saturating), false sets 0.
+    ``init`` and ``worlds`` are the value (a spot's index, or the number) in the initial state
+    and in each belief world."""
+
+    atom: str
+    kind: str
+    size: int
+    init: int
+    worlds: tuple[int, ...]
+    sight: str = "whole"
+    off: int = 0
+    step: int = 1
+
+    def holds(self, value: int) -> bool:
+        """Whether the atom this stands for holds at ``value``."""
+        return value == 1 if self.kind == "variable" else value >= 1
+
+
+@dataclass(frozen=True)
 class Spec:
     """Everything one seed draws; :func:`build` makes it a :class:`Problem`."""
 
@@ -237,6 +269,7 @@ class Spec:
     goal: tuple[Lit, ...]
     action_costs: tuple[tuple[str, int], ...]
     settings: tuple[tuple[str, object], ...]  # ("table.field", value), see SETTINGS
+    values: tuple[ValueSpec, ...] = ()  # atoms written as state variables or counters
 
     def setting(self, key: str) -> object:
         """A drawn setting (KeyError for an option left at its default)."""
@@ -292,6 +325,11 @@ class Spec:
                   f"agendas: robot {list(self.robot_agenda)}, human {list(self.human_agenda)}",
                   f"goal: {lits(self.goal)}", f"action costs: {dict(self.action_costs)}",
                   "settings: " + ", ".join(f"{k}={_show(v)}" for k, v in self.settings)]
+        for v in self.values:
+            what = (f"variable over p0..p{v.size - 1} (holds at p1, false sets p{v.off}, "
+                    f"seen {v.sight})" if v.kind == "variable" else
+                    f"counter 0..{v.size} (holds at >= 1, true adds {v.step}, false sets 0)")
+            lines.append(f"value {v.atom}: {what}; init {v.init}, worlds {list(v.worlds)}")
         return "\n".join(lines)
 
 
@@ -712,9 +750,55 @@ def draw_orders(spec: Spec) -> Spec:
                    robot_seen=seen)
 
 
+VALUES = (0.35, 0.4)
+"""State variables and counters: the share of problems where a generic atom is written as one,
+and the share of those where a second atom is too (the other kind first). Drawn after
+everything else, from generators of their own (see :func:`draw_values`), so no other draw
+changes."""
+
+
+def draw_values(spec: Spec) -> Spec:
+    """``spec`` with generic atoms written as a state variable or a counter (:data:`VALUES`).
+    The atom's truth is kept in every state (conditions, effects, the goal read it as before),
+    so the intended run still goes through; the worlds also draw a value within the atom's
+    truth, so the human may be wrong about which spot or how many."""
+    share, second = VALUES
+    r = random.Random(f"{spec.seed}:values")
+    if r.random() >= share:
+        return spec
+    kinds = dict(spec.atoms)
+    generic = [a for a, _ in spec.atoms if "(" not in a and a != spec.door]
+    order = ["variable", "counter"] if r.random() < 0.5 else ["counter", "variable"]
+    chosen = r.sample(generic, min(len(generic), 2 if r.random() < second else 1))
+    out = []
+    for atom, kind in zip(chosen, order, strict=False):
+        true0 = atom in spec.init
+        size = r.choice([2, 3])
+        if kind == "variable":
+            falses = [0, 2] if size == 3 else [0]
+            init = 1 if true0 else r.choice(falses)
+            seen = kinds[atom] not in ("inferable", "hidden")
+            sight = r.choice(["whole", "value", "others"]) if seen else "whole"
+            off = r.choice(falses)
+            trues = [1]
+        else:
+            falses, trues = [0], list(range(1, size + 1))
+            init = r.randint(1, size) if true0 else 0
+            sight, off = "whole", 0
+        worlds = []
+        for w in spec.worlds:
+            true = true0 != (atom in w.flips)
+            same = init if true == true0 else None
+            pool = trues if true else falses
+            worlds.append(same if same is not None and r.random() < 0.6 else r.choice(pool))
+        out.append(ValueSpec(atom, kind, size, init, tuple(worlds), sight, off,
+                             r.choice([1, 1, 2]) if kind == "counter" else 1))
+    return replace(spec, values=tuple(out))
+
+
 def draw(seed: int) -> Spec:
     """The spec of seed ``seed`` (deterministic)."""
-    return draw_orders(_Drawer(seed).spec())
+    return draw_values(draw_orders(_Drawer(seed).spec()))
 
 
 # --- building ---------------------------------------------------------------------------------
@@ -731,6 +815,11 @@ def build(spec: Spec, *, reverse: bool = False) -> Problem:
     d = Domain(f"random-{spec.seed}")
     Item = d.type("item")
     i = Var("i", Item)
+    valued = {v.atom: v for v in spec.values}
+    spots = [f"p{k}" for k in range(max((v.size for v in spec.values
+                                         if v.kind == "variable"), default=0))]
+    Spot = d.type("spot") if spots else ""
+    at = Var("s", Spot) if spots else i
     home_vis = observable(Atom("home", ()))
     kinds: dict[str, Observability] = {
         "always": observable(), "home": home_vis, "away": observable(~Atom("home", ())),
@@ -747,7 +836,16 @@ def build(spec: Spec, *, reverse: bool = False) -> Problem:
     if spec.items:
         decls.append(("glass", (i,), observable()))
     for head, params, obs in order(decls):
-        d.predicate(head, *params, observability=obs)
+        vs = valued.get(head)
+        if vs is None:
+            d.predicate(head, *params, observability=obs)
+        elif vs.kind == "counter":
+            d.counter(head, max=vs.size, observability=obs)
+        else:  # seen whole, or only whether it is p1, or whether it is not p0
+            if obs.kind == "observable" and vs.sight != "whole":
+                which = eq(at, "p1") if vs.sight == "value" else ~eq(at, "p0")
+                obs = observable(conj(obs.when, which))
+            d.variable(head, values=at, observability=obs)
     d.copresence = cop
 
     def atom(text: str) -> Atom:
@@ -757,12 +855,28 @@ def build(spec: Spec, *, reverse: bool = False) -> Problem:
         a = arg.rstrip(")")
         return Atom(head, (i if a == "?i" else a,))
 
+    def lit(a: str, v: bool) -> Formula:
+        vs = valued.get(a)
+        if vs is None:
+            return atom(a) if v else ~atom(a)
+        if vs.kind == "variable":
+            return d.variables[a]() == "p1" if v else d.variables[a]() != "p1"
+        return d.counters[a]() >= 1 if v else d.counters[a]() == 0
+
     def formula(ls: Iterable[Lit] | None) -> Formula:
-        parts = [atom(a) if v else ~atom(a) for a, v in ls or ()]
+        parts = [lit(a, v) for a, v in ls or ()]
         return conj(*parts) if parts else TRUE
 
+    def effect(a: str, v: bool) -> Effect:
+        vs = valued.get(a)
+        if vs is None:
+            return atom(a) if v else ~atom(a)
+        if vs.kind == "variable":
+            return d.variables[a]().set("p1" if v else f"p{vs.off}")
+        return d.counters[a]().incr(vs.step) if v else d.counters[a]().set(0)
+
     def effects(ls: Iterable[Lit]) -> list[Effect]:
-        return [atom(a) if v else ~atom(a) for a, v in ls]
+        return [effect(a, v) for a, v in ls]
 
     def model_of(ms: ModelSpec, m: AgentModel) -> AgentModel:
         for t in order(ms.tasks):
@@ -794,14 +908,26 @@ def build(spec: Spec, *, reverse: bool = False) -> Problem:
         head, _, arg = text.partition("(")
         return head, (arg.rstrip(")"),) if arg else ()
 
-    init = set(spec.init) | {f"glass({g})" for g in spec.glass}
+    def value_of(vs: ValueSpec, k: int) -> tuple[str, tuple[str, ...]]:
+        return vs.atom, (f"p{k}" if vs.kind == "variable" else str(k),)
+
+    init = set(spec.init) - set(valued) | {f"glass({g})" for g in spec.glass}
     worlds = []
-    for w in spec.worlds:
-        flips = set(w.flips)
-        worlds.append(BeliefWorld(frozenset(call(a) for a in flips - init),
+    for n, w in enumerate(spec.worlds):
+        flips = set(w.flips) - set(valued)
+        told = {value_of(vs, vs.worlds[n]) for vs in spec.values if vs.worlds[n] != vs.init}
+        worlds.append(BeliefWorld(frozenset({*(call(a) for a in flips - init), *told}),
                                   frozenset(call(a) for a in flips & init),
                                   None if w.robot_agenda is None
                                   else tuple(call(t) for t in w.robot_agenda)))
+
+    def goal(a: str, v: bool) -> tuple[bool, tuple[str, tuple[str, ...]]]:
+        vs = valued.get(a)
+        if vs is None:
+            return v, call(a)
+        if vs.kind == "variable":
+            return v, (a, ("p1",))
+        return not v, (a, ("0",))  # at least 1: not 0
     tables: dict[str, dict[str, Any]] = {}
     for key, value in spec.settings:
         table, _, name = key.partition(".")
@@ -811,11 +937,13 @@ def build(spec: Spec, *, reverse: bool = False) -> Problem:
     for table, fields in tables.items():
         cls = TABLES[table]
         kwargs.update(fields if cls is None else {table: cls(**fields)})
+    objects = {"item": order(ITEMS), **({"spot": order(spots)} if spots else {})}
     return Problem(
-        name=f"random-{spec.seed}", domain=d, objects={"item": order(ITEMS)},
-        init=frozenset(call(a) for a in init), robot_agenda=tuple(map(call, spec.robot_agenda)),
+        name=f"random-{spec.seed}", domain=d, objects=objects,
+        init=frozenset({*(call(a) for a in init), *(value_of(vs, vs.init) for vs in spec.values)}),
+        robot_agenda=tuple(map(call, spec.robot_agenda)),
         human_agenda=tuple(map(call, spec.human_agenda)), beliefs=tuple(order(worlds)),
-        goal=tuple((v, call(a)) for a, v in spec.goal), **kwargs)
+        goal=tuple(goal(a, v) for a, v in spec.goal), **kwargs)
 
 
 def problem(seed: int, *, reverse: bool = False) -> Problem:
@@ -954,5 +1082,5 @@ def summary(outcomes: Sequence[Outcome]) -> dict[str, int]:
     return counts
 
 
-__all__ = ["FAILURES", "KINDS", "SETTINGS", "TABLES", "ModelSpec", "Outcome", "Spec", "build",
-           "check", "draw", "problem", "run", "summary"]
+__all__ = ["FAILURES", "KINDS", "SETTINGS", "TABLES", "VALUES", "ModelSpec", "Outcome", "Spec",
+           "ValueSpec", "build", "check", "draw", "problem", "run", "summary"]
