@@ -459,7 +459,7 @@ class _Semantics:
         return self.g.unit_of.get(i, 1 << i)
 
     def units(self, m: int) -> list[int]:
-        """The units the atoms of ``m`` belong to, in index order."""
+        """§2, §5: the units the atoms of ``m`` belong to, in index order."""
         out: list[int] = []
         for i in _bits(m):
             u = self.unit(i)
@@ -468,6 +468,7 @@ class _Semantics:
         return out
 
     def is_variable(self, u: int) -> bool:
+        """§2: whether the unit ``u`` is a state variable (one atom per value)."""
         return u in self.g.unit_names and u not in self.g.counter_max
 
     def say(self, t: int, u: int) -> str:
@@ -482,6 +483,7 @@ class _Semantics:
         return g.atoms[low] if t >> low & 1 else f"not {g.atoms[low]}"
 
     def unit_name(self, u: int) -> str:
+        """§5: the name informing sets are ranked by: the atom, or ``loc(r)``."""
         return self.g.unit_names.get(u) or self.g.atoms[_bits(u)[0]]
 
     def observe(self, worlds: Worlds, t: int, atoms: Iterable[int]) -> Worlds:

@@ -143,7 +143,8 @@ class Grounded:
         return self.unit_of.get(i, 1 << i)
 
     def expand(self, m: int) -> int:
-        """``m`` with every variable and counter it touches made whole."""
+        """§2, §4: ``m`` with every variable and counter it touches made whole (what the
+        human learns of an inferable unit whose value an action changed)."""
         if not m & self.multi_mask:
             return m
         for i in _bits(m & self.multi_mask):
@@ -151,7 +152,8 @@ class Grounded:
         return m
 
     def units(self, m: int) -> list[int]:
-        """The (whole) units ``m`` touches, by their lowest bit."""
+        """§2, §5: the (whole) units ``m`` touches, by their lowest bit: the candidates of an
+        informing set, the order of observation."""
         if not m & self.multi_mask:
             return [1 << i for i in _bits(m)]
         out: list[int] = []
@@ -164,21 +166,23 @@ class Grounded:
         return out
 
     def is_counter(self, unit: int) -> bool:
+        """§2: whether ``unit`` is a counter (else an atom or a state variable)."""
         return unit in self.counter_max
 
     def counter_value(self, s: int, unit: int) -> int:
-        """The value of the counter ``unit`` in ``s``."""
+        """§2: the value of the counter ``unit`` in ``s`` (its bits, lowest first)."""
         return (s & unit) >> _low(unit)
 
     def fact(self, s: int, unit: int) -> str:
-        """What ``s`` says of a multi-bit unit: ``loc(r) = mt``, ``balls(b1) = 2``."""
+        """§2: what ``s`` says of a variable or counter: ``loc(r) = mt``, ``balls(b1) = 2``."""
         if unit in self.counter_max:
             return f"{self.unit_names[unit]} = {self.counter_value(s, unit)}"
         on = s & unit
         return self.atoms[_low(on)] if on else f"{self.unit_names[unit]} = ?"
 
     def unit_name(self, unit: int) -> str:
-        """A unit's name: the atom, or the variable or counter (``loc(r)``)."""
+        """§5: a unit's name, by which informing sets are ranked: the atom, or the variable
+        or counter (``loc(r)``)."""
         return self.unit_names.get(unit) or self.atoms[_low(unit)]
 
     def literal(self, t: int, unit: int) -> str:
@@ -207,6 +211,7 @@ class Grounded:
                                                       for i, u in zip(lo, diff, strict=True)])}
 
     def counter_mask(self) -> int:
+        """The bits of every counter."""
         m = 0
         for u in self.counter_units:
             m |= u
