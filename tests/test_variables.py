@@ -292,6 +292,16 @@ def test_variable_effects_and_conditions_are_checked_in_the_domain() -> None:
     assert str(v().set(p)) == "v := ?p"
 
 
+def test_a_parameter_may_be_given_by_its_type() -> None:
+    d = Domain("short")
+    Cube, Place = d.type("cube"), d.type("place")
+    loc = d.variable("loc", Cube, values=Place)
+    assert loc.params == (Var("cube", Cube),) and loc.values == Place
+    assert str(loc("r") == "mt") == "loc(r) = mt"
+    balls = d.counter("balls", Place, Place, max=3)
+    assert [v.name for v in balls.params] == ["place", "place2"]
+
+
 # --- the paper's cube domain, rewritten --------------------------------------------------------
 
 

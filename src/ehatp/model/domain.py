@@ -588,6 +588,19 @@ def _order_pairs(where: str, order: Iterable[tuple[int, int]],
     return tuple(sorted(pairs))
 
 
+def _named(params: Sequence[Var | str]) -> tuple[Var, ...]:
+    """Parameters, a type name standing for a parameter named after it (``box``, ``box2``)."""
+    out: list[Var] = []
+    for p in params:
+        if isinstance(p, str):
+            n = sum(1 for q in params[:len(out)] if q == p)
+            p = Var(p if n == 0 else f"{p}{n + 1}", p)
+        if not isinstance(p, Var):
+            raise DomainError(f"a parameter is a Var or a type name, not {p!r}")
+        out.append(p)
+    return tuple(out)
+
+
 def _check_scope(where: str, scope: set[Var], formulas: Iterable[Formula]) -> None:
     for f in formulas:
         loose = free_vars(f) - scope
@@ -702,14 +715,17 @@ class Domain:
         self.predicates[name] = pred
         return pred
 
-    def variable(self, name: str, *params: Var, values: str | Var,
+    def variable(self, name: str, *params: Var | str, values: str | Var,
                  observability: Observability | None = None) -> StateVariable:
         """Declare a finite-domain state variable: ``loc(c)`` has exactly one value among the
         objects of type ``values`` (subtypes included) in every state. ``values`` may be a
         typed ``Var`` naming the value, for a visibility condition that depends on it:
         ``d.variable("pasta_at", values=p, observability=observable(at(H, p)))`` (the human
-        sees whether the pasta is where it stands). Observable always unless told otherwise."""
+        sees whether the pasta is where it stands). Observable always unless told otherwise. A
+        parameter may be given by its type alone (``d.variable("loc", Cube, values=Place)``):
+        it is then named after the type."""
         self._fresh_pred(name)
+        params = _named(params)
         value = values if isinstance(values, Var) else Var("value", values)
         if not isinstance(value.type, str) or value.type not in self.types:
             raise DomainError(f"variable {name}: unknown value type {value.type!r}")
@@ -724,12 +740,14 @@ class Domain:
         self.variables[name] = v
         return v
 
-    def counter(self, name: str, *params: Var, max: int,
+    def counter(self, name: str, *params: Var | str, max: int,
                 observability: Observability | None = None) -> Counter:
         """Declare a bounded counter ``balls(b) ∈ 0..max`` (stored in binary, one atom per
         bit); 0 unless the problem's ``[init]`` says otherwise. Observable always unless told
-        otherwise; the visibility condition may use the counter's parameters."""
+        otherwise; the visibility condition may use the counter's parameters. A parameter may be
+        given by its type alone (``d.counter("balls", Box, max=3)``)."""
         self._fresh_pred(name)
+        params = _named(params)
         if isinstance(max, bool) or not isinstance(max, int) or max < 1:
             raise DomainError(f"counter {name}: max must be a whole number >= 1, got {max!r}")
         for p in params:
