@@ -17,6 +17,8 @@ while the values still fit, and a :class:`MemoryError` anywhere is a memory stop
 
 from __future__ import annotations
 
+import os
+import sys
 import time
 from collections.abc import Callable
 
@@ -31,6 +33,7 @@ POST_BYTES_PER_STATE = 220
 MEMORY_HEADROOM = 0.95  # the search stops when it would pass this fraction of max_memory
 
 TIMEOUT, MEMORY = "timeout", "memory-limit"
+
 
 def format_size(n: int) -> str:
     """Bytes for people: ``1.5 GB``, ``300 MB``."""
@@ -48,19 +51,11 @@ def resident_bytes() -> int:
         import resource
 
         peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-        return peak if _darwin() else peak * 1024
-
-
-def _darwin() -> bool:
-    import sys
-
-    return sys.platform == "darwin"
+        return peak if sys.platform == "darwin" else peak * 1024  # bytes there, else kB
 
 
 def _page_size() -> int:
     try:
-        import os
-
         return os.sysconf("SC_PAGE_SIZE")
     except (ValueError, OSError, AttributeError):
         return 4096
