@@ -290,6 +290,13 @@ def test_variable_effects_and_conditions_are_checked_in_the_domain() -> None:
         v() == Var("x", "item")  # noqa: B015 - builds a formula
     assert str(v() == p) == "v = ?p" and str(v() != "mt") == "v != mt"
     assert str(v().set(p)) == "v := ?p"
+    d.constant("mt", Place)
+    d.constant("ot", Place)
+    d.robot.action("twice", effects=[v().set("mt"), v().set("ot")])
+    p2 = Problem(name="bad", domain=d, objects={}, init=frozenset({("v", ("mt",))}),
+                 robot_agenda=(("twice", ()),), human_agenda=())
+    with pytest.raises(DomainError, match="the action already changes v; give it one value"):
+        ground_problem(p2)
 
 
 def test_a_parameter_may_be_given_by_its_type() -> None:

@@ -644,6 +644,9 @@ class _Grounder:
                 for c_f, bits in sets:
                     c = simplify_and([cond, c_f])
                     if c == TRUE:
+                        if (add | dele) & unit:  # one value at a time
+                            raise DomainError(f"effect {e}: the action already changes "
+                                              f"{Atom(e.name, e.args)}; give it one value")
                         add |= bits
                         dele |= unit & ~bits
                     elif c != FALSE:
