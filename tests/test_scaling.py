@@ -141,3 +141,52 @@ def test_scaling_script_prints_the_table(tmp_path: Path) -> None:
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     assert "cooking-k2" in r.stdout and "states/s" in r.stdout
+
+
+# -- the search does less work, with the same results (docs/semantics.md §7, "Search") --------
+
+
+@pytest.mark.parametrize("name", ["cubes/p1.toml", "cubes/p4.toml", "cubes/p6.toml",
+                                  "cooking/cooking2.toml", "communication/late-fatal.toml",
+                                  "sally-anne/inform.toml"])
+def test_live_worst_case_values_are_knuths_after_every_expansion(
+        monkeypatch: pytest.MonkeyPatch, name: str) -> None:
+    assert _check_live_values(monkeypatch, ehatp.load(ROOT / "examples" / name)) > 0
+
+
+def test_live_values_on_random_problems(monkeypatch: pytest.MonkeyPatch) -> None:
+    from ehatp.tools import randomgen
+
+    # every option varies on these (speech openings with their zero-cost silence included)
+    checked = [_check_live_values(monkeypatch, randomgen.problem(seed), max_states=3000)
+               for seed in range(100)]
+    assert sum(1 for c in checked if c) >= 25
+
+
+def _check_live_values(monkeypatch: pytest.MonkeyPatch, problem: ehatp.Problem,
+                       max_states: int = 20_000) -> int:
+    """Solve ``problem``, checking the kept-up-to-date values against a full pass after every
+    expansion once the root is solved (every tenth after the first 300); how many expansions
+    were checked."""
+    from ehatp.search import values
+
+    real = values.LiveWorst.expanded
+    checked = 0
+
+    seen = 0
+
+    def expanded(self: values.LiveWorst, n: int) -> None:
+        nonlocal checked, seen
+        real(self, n)
+        seen += 1
+        if seen <= 300 or not seen % 10:
+            full, _ = values.knuth(self.gr)
+            assert self.value == full, n
+            checked += 1
+
+    monkeypatch.setattr(values.LiveWorst, "expanded", expanded)
+    r = ehatp.solve(problem, max_states=max_states)
+    assert r.status in ("solved", "unsolvable", "state-limit")
+    if r.status == "solved" and problem.objective.kind == ehatp.ObjectiveKind.WORST_CASE:
+        assert r.optimal
+    return checked
