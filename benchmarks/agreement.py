@@ -1,6 +1,7 @@
 """Planner/validator agreement on random problems: solve, validate, re-solve.
 
     .venv/bin/python benchmarks/agreement.py --n 10000 [--start SEED] [--jobs N] [--verbose]
+        [--no-symmetry]
     .venv/bin/python benchmarks/agreement.py --show SEED      # print one seed's problem
 
 Solves the random problems of seeds start..start+n-1 (``ehatp.tools.randomgen``), validates
@@ -8,7 +9,8 @@ every policy the planner returns with the independent validator, and on one seed
 again (and declared in reverse order), expecting byte-identical policy JSON. A search stopped by
 its limits is counted apart (skipped). Prints every crash and disagreement with its seed (and,
 in braces, the model options its problem sets away from the defaults), then the counts and the
-time taken; exits 1 if there is any crash, disagreement or nondeterminism.
+time taken; exits 1 if there is any crash, disagreement or nondeterminism. ``--no-symmetry``
+solves without the symmetry reduction (docs/semantics.md §3), whatever the problems say.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from pathlib import Path
 # run the checkout this file lives in, whatever is installed
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "src"))
 
+from ehatp.search import symmetry  # noqa: E402
 from ehatp.tools import randomgen  # noqa: E402
 
 
@@ -37,7 +40,11 @@ def main(argv: list[str] | None = None) -> int:
                     help="one line per seed: outcome, planner status, time")
     ap.add_argument("--show", type=int, metavar="SEED",
                     help="print the problem of SEED and what checking it gives, then exit")
+    ap.add_argument("--no-symmetry", action="store_true",
+                    help="search without the symmetry reduction (docs/semantics.md §3)")
     args = ap.parse_args(argv)
+    if args.no_symmetry:  # the workers are forked: they inherit it
+        symmetry.OVERRIDE = False
     if args.n < 1:
         ap.error("--n must be at least 1")
     if args.jobs < 1:

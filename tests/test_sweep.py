@@ -62,6 +62,9 @@ true = [
 [agenda]
 robot = ["organize"]
 human = ["organize"]
+
+[limits]
+symmetry = false  # with it (docs/semantics.md §3) a few thousand states suffice
 """
 
 

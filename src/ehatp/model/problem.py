@@ -60,6 +60,8 @@ class Limits:
     max_memory: int | None = None  # bytes of resident memory; [limits] max_memory = "2G"
     # nested methods allowed before a refinement's first action (docs/semantics.md §1)
     max_decomposition: int = 64
+    # search over states up to interchangeable objects (docs/semantics.md §3, "Symmetry")
+    symmetry: bool = True
 
 
 @dataclass(frozen=True)
@@ -170,7 +172,7 @@ _TABLE_KEYS: dict[str, frozenset[str]] = {
     "agenda": frozenset({"robot", "human"}),
     "costs": frozenset({"inform", "ask", "wait", "pass", "actions"}),
     "limits": frozenset({"timeout", "max_states", "max_depth", "max_memory",
-                         "max_decomposition"}),
+                         "max_decomposition", "symmetry"}),
     **OPTION_KEYS,
 }
 _TOP_TABLES = {"problem", "domain", "objects", "init", "beliefs", "agenda", "costs", "limits",
@@ -483,6 +485,7 @@ def loads(text: str, path: str | Path, overrides: Mapping[str, Any] | None = Non
         if "max_memory" in l_t else None,
         max_decomposition=_int(r, "[limits] max_decomposition",
                                l_t.get("max_decomposition", Limits.max_decomposition)),
+        symmetry=_flag(r, "[limits] symmetry", l_t.get("symmetry", Limits.symmetry)),
     )
     human, communication, objective, notes = read_options(r, data)
     after = tuple(r.strings("[problem] after", prob.get("after", [])))
@@ -537,6 +540,12 @@ def _override(file: str, data: dict[str, Any], dotted: str, value: Any) -> None:
 def _int(r: _Reader, place: str, v: Any) -> int:
     if isinstance(v, bool) or not isinstance(v, int) or v <= 0:
         raise r.err(place, f"expected a whole number > 0, got {_show(v)}", "write e.g. 1000")
+    return v
+
+
+def _flag(r: _Reader, place: str, v: Any) -> bool:
+    if not isinstance(v, bool):
+        raise r.err(place, f"expected true or false, got {_show(v)}", "write e.g. false")
     return v
 
 

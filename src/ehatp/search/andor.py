@@ -34,6 +34,7 @@ from ..model.grounding import Grounded
 from ..model.options import ObjectiveKind
 from ..model.problem import Cost
 from .limits import Budget, LimitReached
+from .symmetry import Symmetry, SymSemantics, detect
 from .values import LiveWorst, Values, compute_values
 
 OPEN, EXPANDED, GOAL, DEAD = 0, 1, 2, 3
@@ -44,10 +45,13 @@ KIND_ORDER = {"silence": -1, "action": 0, "inform": 1, "ask": 2, "wait": 3, "pas
 class Edge:
     """One option (robot) or branch (human) of a node. ``move`` describes the move (shared by
     the edges of equal moves; its ``child`` state is not kept: None, or for ``inform`` the
-    child node's state); ``child`` is the child node's id, -1 when the move fails."""
+    child node's state); ``child`` is the child node's id, -1 when the move fails. Over
+    symmetry-reduced states (:mod:`.symmetry`), ``perm`` is the renaming (an id) that maps the
+    move's real child to the child node's canonical state; 0 is none."""
 
     move: Move
     child: int
+    perm: int = 0
 
 
 NO_EDGES: tuple[Edge, ...] = ()
@@ -90,6 +94,10 @@ class Graph:
         self._worlds: dict[Worlds, Worlds] = {}
         self._trues: dict[int, int] = {}
         self._moves: dict[tuple[object, ...], Move] = {}
+        # search over canonical states (docs/semantics.md §3, "Symmetry"): the renamings, and
+        # the one mapping the real root to the root node's state
+        self.sym: Symmetry | None = None
+        self.root_perm = 0
 
     def add(self, es: EState, g: Cost, depth: int, parent: int = -1) -> int:
         """A new node for ``es`` (worlds and true state shared with equal ones)."""
@@ -158,14 +166,17 @@ Progress = Callable[[Stats, int], None]
 def search(grounded: Grounded, *, timeout: float | None = None, max_states: int | None = None,
            max_depth: int | None = None, progress: Progress | None = None,
            max_memory: int | None = None, budget: Budget | None = None,
-           stats: Stats | None = None) -> SearchOutcome:
+           stats: Stats | None = None, symmetry: bool = False) -> SearchOutcome:
     """§7: explore from the root until the optimum is proven (worst case), everything
     reachable is explored (expected cost), or a limit is reached; then the values.
 
     Limits default to the problem's ``[limits]``; ``budget`` (time and memory for the whole
     solve, :class:`~.limits.Budget`) replaces ``timeout`` and ``max_memory`` when given.
     ``progress(stats, frontier)`` is called about 20 times a second; ``stats``, when given, is
-    the object the search keeps its statistics in."""
+    the object the search keeps its statistics in. With ``symmetry`` the nodes are canonical
+    states (docs/semantics.md §3, "Symmetry"; :mod:`.symmetry`); when a decision taken by
+    index or name order makes that unsound the search stops with status
+    ``"symmetry-unsafe"`` (the planner then solves again without it)."""
     limits = grounded.problem.limits
     max_states = limits.max_states if max_states is None else max_states
     max_depth = limits.max_depth if max_depth is None else max_depth
@@ -182,7 +193,8 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
     budget.phase = "search"
     # worst case: stop as soon as the optimum is proven; expected cost: explore everything
     early_stop = grounded.problem.objective.kind == ObjectiveKind.WORST_CASE
-    sem = Semantics(grounded)
+    sym = detect(grounded) if symmetry else None
+    sem = Semantics(grounded) if sym is None else SymSemantics(grounded, sym)
     gr = Graph(sem)
     root_state = sem.initial()
     for i, label in enumerate(grounded.problem.after):
@@ -191,6 +203,10 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
         except ValueError as e:
             raise InputError(grounded.problem.source, f"[problem] after, step {i + 1}", str(e),
                              "give a move possible at that point") from None
+    if isinstance(sem, SymSemantics):
+        sem.unsafe = ""  # the root is a real state: its own decisions are the real ones
+        gr.sym = sem.sym
+        root_state, gr.root_perm = sem.sym.canon(root_state)
     root = gr.add(root_state, 0, 0)
     stats.generated = stats.distinct = 1
     stats.max_worlds = len(root_state.worlds)
@@ -221,6 +237,9 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
                                                 "distinct states)"
                 break
             _expand(gr, n, heap, stats, max_depth)
+            if isinstance(sem, SymSemantics) and sem.unsafe:
+                status, reason = "symmetry-unsafe", sem.unsafe
+                break
             if live is not None:
                 live.expanded(n)
             elif early_stop and gr.solved[root]:
@@ -268,6 +287,7 @@ def _expand(gr: Graph, n: int, heap: list[tuple[Cost, int]], stats: Stats,
     moves = sorted(sem.moves(es), key=_move_key)
     g0, d0 = gr.g[n], gr.depth[n] + 1
     index, gs, status = gr.index, gr.g, gr.status
+    sym = gr.sym
     edges: list[Edge] = []
     for m in moves:
         child = m.child
@@ -275,6 +295,9 @@ def _expand(gr: Graph, n: int, heap: list[tuple[Cost, int]], stats: Stats,
             edges.append(Edge(gr.descriptor(m, -1), -1))
             continue
         stats.generated += 1
+        pid = 0
+        if sym is not None:
+            child, pid = sym.canon(child)
         c = index.get(child)
         g1 = g0 + m.cost
         if c is None:
@@ -288,7 +311,7 @@ def _expand(gr: Graph, n: int, heap: list[tuple[Cost, int]], stats: Stats,
                 gs[c], gr.depth[c] = g1, d0
                 heapq.heappush(heap, (g1, c))
             gr.add_parent(c, n)
-        edges.append(Edge(gr.descriptor(m, c), c))
+        edges.append(Edge(gr.descriptor(m, c), c, pid))
     gr.edges[n] = tuple(edges)
     gr.status[n] = EXPANDED
     if not gr.is_robot(n):

@@ -8,10 +8,11 @@ from typing import Any
 from ..model.grounding import ground_problem
 from ..model.problem import Problem
 from ..policy_format import Policy
+from . import symmetry as _symmetry
 from .andor import Progress, Stats, search
 from .diagnose import diagnose
 from .limits import Budget, LimitReached
-from .policy import explain_failure, extract
+from .policy import explain_failure, extract, realise
 
 
 @dataclass
@@ -32,7 +33,8 @@ LIMITS = ("timeout", "state-limit", "memory-limit")
 
 def solve(problem: Problem, *, timeout: float | None = None, max_states: int | None = None,
           max_depth: int | None = None, progress: Progress | None = None,
-          max_memory: int | None = None, budget: Budget | None = None) -> Result:
+          max_memory: int | None = None, budget: Budget | None = None,
+          symmetry: bool | None = None) -> Result:
     """Plan a robot policy for ``problem``, optimal under ``problem.objective``
     (docs/semantics.md §7: worst-case by default, or expected cost).
 
@@ -43,6 +45,11 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
     carries partial statistics, and the best policy found so far if there is one (``optimal``
     False); ``reason`` says which limit. ``progress(stats, frontier)`` is called about 20 times
     a second, ``stats.phase`` naming the work under way.
+
+    ``symmetry`` (default: ``[limits] symmetry``) searches over canonical states, the policy
+    mapped back to the real objects (docs/semantics.md §3, "Symmetry"); when the reduction
+    cannot be trusted for this problem (a decision taken by name or index order, or a move
+    that does not map back) the problem is solved again without it.
     """
     limits = problem.limits
     if budget is None:
@@ -64,8 +71,15 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
     except MemoryError:
         oom = budget.out_of_memory()
         return Result(oom.status, None, live.as_dict(), oom.reason)
+    if symmetry is None:
+        symmetry = (problem.limits.symmetry if _symmetry.OVERRIDE is None
+                    else _symmetry.OVERRIDE)
     out = search(grounded, max_states=max_states, max_depth=max_depth, budget=budget,
-                 stats=live)
+                 stats=live, symmetry=symmetry)
+    if out.status == "symmetry-unsafe":
+        _restart(live)
+        out = search(grounded, max_states=max_states, max_depth=max_depth, budget=budget,
+                     stats=live)
     stats: dict[str, Any] = out.stats.as_dict()
     stats["atoms"] = len(grounded.atoms)
     status, reason, optimal = out.status, out.reason, out.optimal
@@ -75,7 +89,15 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
         budget.phase = "extraction"
         try:
             budget.check()
-            policy = extract(out.graph, out.root, out.values, problem_name=problem.name,
+            graph, root, values = out.graph, out.root, out.values
+            if graph.sym is not None:
+                real = realise(graph, root, values, check=budget.check)
+                if isinstance(real, str):  # not expected: solve without symmetry
+                    _restart(live)
+                    return solve(problem, max_states=max_states, max_depth=max_depth,
+                                 budget=budget, symmetry=False)
+                graph, root, values = real
+            policy = extract(graph, root, values, problem_name=problem.name,
                              optimal=optimal, stats=public, check=budget.check)
             budget.check()
         except LimitReached as e:
@@ -98,3 +120,10 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
                   "were restricted to those of the worst-case pass")
     budget.phase = "done"
     return Result(status, policy, stats, reason, optimal)
+
+
+def _restart(live: Stats) -> None:
+    """Statistics start again for a search without symmetry."""
+    fresh = Stats()
+    for k in ("generated", "distinct", "expanded", "max_worlds", "frontier"):
+        setattr(live, k, getattr(fresh, k))

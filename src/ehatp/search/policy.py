@@ -12,7 +12,7 @@ from ..model.htn import Agenda
 from ..model.options import Objective, ObjectiveKind
 from ..model.problem import Cost
 from ..policy_format import Policy, PolicyMove, PolicyNode, num, topological_order
-from .andor import GOAL, Edge, Graph
+from .andor import EXPANDED, GOAL, Edge, Graph, _move_key
 from .values import Values, weighted_mean
 
 
@@ -109,6 +109,119 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
     return policy
 
 
+def realise(gr: Graph, root: int, values: Values,
+            check: Callable[[], None] | None = None) -> tuple[Graph, int, Values] | str:
+    """The chosen policy of a search over canonical states (docs/semantics.md §3,
+    "Symmetry") on the real objects: a graph of the real states the policy reaches, each move
+    the real semantics' own move (with its real label and child), ready for :func:`extract`.
+
+    A policy node is a search node ``n`` and the renaming ``tau`` from its canonical state to
+    the real one; the root's is the inverse of the root's canonicalisation, and an edge whose
+    real child was renamed by ``rho`` to reach its node gives the child ``tau . rho^-1``. Real
+    states are memoised, so the result is a function of the real state (a real state reached
+    under two renamings keeps the first: both sub-policies are images of one). Every real node
+    is expanded again with the real semantics and each chosen edge matched to a real move with
+    the renamed child (and the renamed action or atoms told); a human node's real moves must
+    match its edges one to one. A mismatch is returned as a message (the caller then solves
+    without symmetry): it would mean the semantics is not equivariant where
+    :class:`~.symmetry.SymSemantics` did not notice."""
+    sym, sem = gr.sym, gr.sem
+    assert sym is not None
+    if check is None:
+        def check() -> None:
+            pass
+    watch = getattr(sem, "watch", None)
+    if watch is not None:
+        sem.watch = False  # type: ignore[attr-defined]  # real states: their own decisions
+    try:
+        return _realise(gr, root, values, check)
+    finally:
+        if watch is not None:
+            sem.watch = watch  # type: ignore[attr-defined]
+
+
+def _realise(gr: Graph, root: int, values: Values,
+             check: Callable[[], None]) -> tuple[Graph, int, Values] | str:
+    sym, sem = gr.sym, gr.sem
+    assert sym is not None
+    rg = Graph(sem)
+    tau0 = sym.inverse(gr.root_perm)
+    real_root = rg.add(sym.apply(tau0, gr.states[root]), 0, 0)
+    choice: dict[int, int] = {}
+    stack = [(root, tau0, real_root)]
+    while stack:
+        n, tau, r = stack.pop()
+        check()
+        if gr.status[n] == GOAL:
+            rg.status[r] = GOAL
+            continue
+        rg.status[r] = EXPANDED
+        edges = gr.edges[n]
+        chosen = [edges[values.choice[n]]] if gr.is_robot(n) else list(edges)
+        real = sorted(sem.moves(rg.states[r]), key=_move_key)
+        if not gr.is_robot(n) and len(real) != len(chosen):
+            return f"{len(real)} real moves for {len(chosen)} canonical ones"
+        used: set[int] = set()
+        out: list[Edge] = []
+        for e in chosen:
+            if e.child < 0:
+                return "a failing move in the policy"
+            sigma = sym.compose(tau, sym.inverse(e.perm))
+            z = sym.apply(sigma, gr.states[e.child])
+            j = _match(sym, tau, e.move, z, real, used)
+            if j < 0:  # a tie decided by name (§5): a real move to a renaming of the child
+                j, z, sigma = _match_orbit(sym, e.move, gr.states[e.child], real, used)
+                if j < 0:
+                    return f"no real move for {sym.label(tau, e.move.label)}"
+            used.add(j)
+            c = rg.index.get(z)
+            if c is None:
+                c = rg.add(z, 0, 0)
+                stack.append((e.child, sigma, c))
+            rg.add_parent(c, r)
+            out.append(Edge(rg.descriptor(real[j], c), c))
+        rg.edges[r] = tuple(out)
+        if gr.is_robot(n):
+            choice[r] = 0
+    zeros: list[Cost | float] = [0] * len(rg.states)
+    return rg, real_root, Values(zeros, choice, zeros)
+
+
+def _match(sym: Any, tau: int, m: Move, child: EState, real: list[Move],
+           used: set[int]) -> int:
+    """The real move that is ``m`` renamed by ``tau`` and leads to ``child``: same agent,
+    kind and cost, the renamed action and atoms told, preferably the renamed label."""
+    op = sym.task_map(tau).get(m.op, m.op) if m.op >= 0 else m.op
+    atoms = sym.state(tau, m.atoms)
+    found = -1
+    label = sym.label(tau, m.label)
+    for j, x in enumerate(real):
+        if j in used or x.child != child or x.agent != m.agent or x.kind != m.kind \
+                or x.cost != m.cost or x.op != op or x.atoms != atoms:
+            continue
+        if x.label == label:
+            return j
+        if found < 0:
+            found = j
+    return found
+
+
+def _match_orbit(sym: Any, m: Move, node: EState, real: list[Move],
+                 used: set[int]) -> tuple[int, EState, int]:
+    """A real move of the same agent, kind and cost as ``m`` whose child has the canonical
+    form ``node`` (an ``inform`` of another set tied with the canonical one on everything but
+    names, :class:`~.symmetry.SymSemantics`); its index, child and the renaming from ``node``
+    to that child."""
+    for j, x in enumerate(real):
+        if j in used or x.child is None or x.agent != m.agent or x.kind != m.kind \
+                or x.cost != m.cost:
+            continue
+        c, pid = sym.canon(x.child)
+        if c == node:
+            return j, x.child, sym.inverse(pid)
+    return -1, node, 0
+
+
 def graph_costs(nodes: list[PolicyNode], objective: Objective) -> tuple[list[Cost], list[Cost]]:
     """§7 on a policy graph: each node's worst-case and expected cost to the end (the maximum,
     resp. the weighted mean, over a human node's moves; a robot node has one move), children
@@ -129,10 +242,17 @@ def graph_costs(nodes: list[PolicyNode], objective: Objective) -> tuple[list[Cos
 
 
 def explain_failure(gr: Graph, root: int) -> str:
-    """Follow one failing line of play from the root and say where it dies."""
+    """Follow one failing line of play from the root and say where it dies (over canonical
+    states, docs/semantics.md §3, the moves are renamed back to the real objects)."""
     from .andor import DEAD, OPEN
 
     sem = gr.sem
+    sym = gr.sym
+    tau = sym.inverse(gr.root_perm) if sym is not None else 0
+
+    def real(text: str) -> str:
+        return sym.label(tau, text) if sym is not None else text
+
     names = (sem.names[0], sem.names[1])
     path: list[str] = []
     seen = {root}
@@ -151,13 +271,15 @@ def explain_failure(gr: Graph, root: int) -> str:
             bad = [e for e in edges if e.child < 0 or not gr.solved[e.child]]
             fail = next((e for e in bad if e.child < 0), None)
             if fail is not None:
-                path.append(f"{names[1]} {fail.move.label}")
-                return _why(path, fail.move.failure)
+                path.append(f"{names[1]} {real(fail.move.label)}")
+                return _why(path, real(fail.move.failure))
             nxt = next((e for e in bad if e.child not in seen), None)
             if nxt is None:
                 return _why(path, "every human choice here loops back to an earlier state")
         agent = names[0] if nxt.move.agent == ROBOT else names[1]
-        path.append(f"{agent} {nxt.move.label}")
+        path.append(f"{agent} {real(nxt.move.label)}")
+        if sym is not None:
+            tau = sym.compose(tau, sym.inverse(nxt.perm))
         n = nxt.child
         seen.add(n)
 
@@ -168,4 +290,4 @@ def _why(path: list[str], reason: str) -> str:
     return (f"after {more}{steps}: {reason}" if path else reason)
 
 
-__all__ = ["explain_failure", "extract", "graph_costs"]
+__all__ = ["explain_failure", "extract", "graph_costs", "realise"]

@@ -206,6 +206,10 @@ def solve_cmd(
         "--objective", help="What to minimise: the worst case over the human's choices or the "
                             "expected cost (default: the problem's [objective] kind, else "
                             "worst-case).", show_default=False)] = None,
+    no_symmetry: Annotated[bool, typer.Option(
+        "--no-symmetry", help="Search every state, not one per renaming of interchangeable "
+                              "objects (default: the problem's limits.symmetry, else on; "
+                              "docs/semantics.md §3).")] = False,
 ) -> None:
     """Plan a robot policy, optimal under the problem's objective, and write it as JSON.
 
@@ -236,7 +240,7 @@ def solve_cmd(
     try:
         with user_errors(problem):
             result = solve(prob, max_states=max_states, max_depth=max_depth, progress=live,
-                           budget=budget)
+                           budget=budget, symmetry=False if no_symmetry else None)
         if result.policy is not None:
             budget.phase = "writing"
             try:

@@ -1,0 +1,595 @@
+"""Search over symmetry-reduced epistemic states (docs/semantics.md §3, "Symmetry").
+
+Interchangeable objects (the cubes of one table, two empty boxes) multiply the states the search
+meets: a state and the same state with two cubes' names swapped have the same value, and their
+policies are each other's image. This module finds such objects from the ground problem as data
+and gives the search a *canonical* representative of each state, with the renaming that maps the
+state to it, so that extraction can map the chosen policy back to the real objects.
+
+**Symmetries.** A renaming of objects (within one type) is an *automorphism* of the ground
+problem when it maps it onto itself: the initial state, the belief worlds with their robot
+agendas, both agendas, the observable / inferable / hidden atoms and the visibility groups, the
+co-presence and goal formulas, and the three models' ground operators (precondition, effects,
+cost, done-condition), methods (precondition, subtasks, order) and done-conditions (static atoms
+are folded into those formulas). Objects named by the problem — in an agenda, a goal literal,
+``after``, a belief world's robot agenda, a cost or objective weight by ground label, or a
+domain constant — are fixed. Two objects of one own type are *interchangeable* when swapping
+them is an automorphism (checked formula by formula, conjunctions and disjunctions compared as
+sets); interchangeability is an equivalence (a swap ``(a c)`` is ``(a b)(b c)(a b)``), so its
+classes are found with one check per object and class, and every permutation within the classes
+is an automorphism (transpositions generate them).
+
+**Equivariance.** The transition rules commute with an automorphism, except where they decide
+by index or name order: belief revision observes units one at a time in index order (§2), and
+the informing set's last tie-break is by name (§5). :class:`SymSemantics` watches both: an
+observation whose result could depend on the order of the units it touches (two or more units
+on which the worlds differ, no world agreeing with the truth on all of them, one of them naming
+an interchangeable object), or an informing set tied with another on everything but names,
+marks the search *unsafe*, and the planner solves again without symmetry. Extraction replays
+every policy node on the real problem and checks each move against the real semantics; a
+mismatch also falls back (it would be a bug, never a wrong policy).
+"""
+
+from __future__ import annotations
+
+import re
+from collections import Counter
+from collections.abc import Callable, Iterable, Sequence
+from itertools import combinations
+from typing import Any
+
+from ..epistemic.semantics import Semantics
+from ..epistemic.state import EState, Worlds, normalize, states_of
+from ..model.formula import And, Formula, GAtom, GTest, Not, Or
+from ..model.grounding import GModel, Grounded
+from ..model.htn import Agenda
+from ..model.options import Relevance
+
+OVERRIDE: bool | None = None
+"""When not None, replaces every problem's ``[limits] symmetry`` (benchmarks use it to compare
+runs with and without symmetry; worker processes forked later inherit it)."""
+
+_TOKEN = re.compile(r"[^\s(),=\[\]<>!|{}+;:]+")
+
+Perm = tuple[int, ...]  # image of each movable object, by index into Symmetry.objects
+
+
+def _split(name: str) -> tuple[str, tuple[str, ...], str]:
+    """``loc(c1) = box1`` -> ("loc", ("c1",), " = box1"); ``on(a, b)`` -> ("on", ("a", "b"),
+    ""); ``washed`` -> ("washed", (), "")."""
+    head, par, rest = name.partition("(")
+    if not par:
+        return head, (), ""
+    inside, _, suffix = rest.partition(")")
+    args = tuple(a.strip() for a in inside.split(",")) if inside.strip() else ()
+    return head, args, suffix
+
+
+def _join(head: str, args: Sequence[str], suffix: str) -> str:
+    return (f"{head}({', '.join(args)})" if args else head) + suffix
+
+
+class NotSymmetric(Exception):
+    """A renaming that is not an automorphism of the ground problem."""
+
+
+class Symmetry:
+    """The interchangeable objects of a ground problem, and canonical forms of states.
+
+    ``classes`` lists, per class, the indices (into ``objects``) of its objects in name order.
+    A permutation is a tuple giving each movable object's image; permutations are interned
+    (:meth:`pid`), 0 being the identity."""
+
+    def __init__(self, g: Grounded, classes: list[list[str]]) -> None:
+        self.g = g
+        self.objects = [o for cls in classes for o in cls]
+        self.index = {o: i for i, o in enumerate(self.objects)}
+        self.classes = [[self.index[o] for o in cls] for cls in classes]
+        self.class_of = {i: c for c, cls in enumerate(self.classes) for i in cls}
+        n = len(self.objects)
+        self.perms: list[Perm] = [tuple(range(n))]
+        self._pid: dict[Perm, int] = {self.perms[0]: 0}
+        self._atom_maps: dict[int, dict[int, int]] = {}
+        self._task_maps: dict[int, dict[int, int]] = {}
+        self._inverse: dict[int, int] = {0: 0}
+        # atoms and tasks naming a movable object, with each object's role in them
+        self.movable_mask = 0
+        self._atom_parts: dict[int, tuple[str, tuple[str, ...], str]] = {}
+        self._atom_roles: dict[int, tuple[tuple[int, int], ...]] = {}
+        roles: dict[tuple[Any, ...], int] = {}
+        for i, a in enumerate(g.atoms):
+            parts = _split(a)
+            roles_i = self._roles(parts, roles)
+            if roles_i:
+                self.movable_mask |= 1 << i
+                self._atom_parts[i] = parts
+                self._atom_roles[i] = roles_i
+        self._task_parts: dict[int, tuple[str, tuple[str, ...], str]] = {}
+        self._task_roles: dict[int, tuple[tuple[int, int], ...]] = {}
+        for t, name in enumerate(g.task_names):
+            parts = _split(name)
+            roles_t = self._roles(parts, roles)
+            if roles_t:
+                self._task_parts[t] = parts
+                self._task_roles[t] = roles_t
+        self._sig: dict[int, list[list[int]]] = {}
+        self._ag_sig: dict[Agenda, list[list[tuple[int, int]]]] = {}
+
+    def _roles(self, parts: tuple[str, tuple[str, ...], str],
+               roles: dict[tuple[Any, ...], int]) -> tuple[tuple[int, int], ...]:
+        """Each movable object named in an atom or task, with its *role* there: the name with
+        that object as "self", other movable objects by their class, fixed ones by name."""
+        head, args, suffix = parts
+        names = [*args, suffix[3:]] if suffix.startswith(" = ") else list(args)
+        out = []
+        for o in dict.fromkeys(x for x in names if x in self.index):
+            key = (head, suffix if not suffix.startswith(" = ") else " = ",
+                   tuple("" if x == o else (self.class_of[self.index[x]],)
+                         if x in self.index else x for x in names))
+            r = roles.setdefault(key, len(roles))
+            out.append((self.index[o], r))
+        return tuple(out)
+
+    # -- permutations -------------------------------------------------------------------------
+    def pid(self, p: Perm) -> int:
+        i = self._pid.get(p)
+        if i is None:
+            i = self._pid[p] = len(self.perms)
+            self.perms.append(p)
+        return i
+
+    def inverse(self, pid: int) -> int:
+        r = self._inverse.get(pid)
+        if r is None:
+            p = self.perms[pid]
+            inv = [0] * len(p)
+            for i, j in enumerate(p):
+                inv[j] = i
+            r = self._inverse[pid] = self.pid(tuple(inv))
+        return r
+
+    def compose(self, a: int, b: int) -> int:
+        """The permutation ``a`` after ``b`` (``b`` first)."""
+        if a == 0:
+            return b
+        if b == 0:
+            return a
+        pa, pb = self.perms[a], self.perms[b]
+        return self.pid(tuple(pa[j] for j in pb))
+
+    def rename(self, pid: int) -> dict[str, str]:
+        """The object renaming of ``pid``, by name (moved objects only)."""
+        p = self.perms[pid]
+        return {self.objects[i]: self.objects[j] for i, j in enumerate(p) if i != j}
+
+    def _name_map(self, parts: tuple[str, tuple[str, ...], str], ren: dict[str, str]) -> str:
+        head, args, suffix = parts
+        if suffix.startswith(" = "):
+            v = suffix[3:]
+            suffix = " = " + ren.get(v, v)
+        return _join(head, [ren.get(a, a) for a in args], suffix)
+
+    def atom_map(self, pid: int) -> dict[int, int]:
+        """Atom index -> its image under ``pid`` (moved atoms only); KeyError when an image
+        is no atom (detection turns that into "not an automorphism")."""
+        m = self._atom_maps.get(pid)
+        if m is None:
+            ren = self.rename(pid)
+            idx = self.g.atom_index
+            m = {}
+            for i, parts in self._atom_parts.items():
+                j = idx[self._name_map(parts, ren)]
+                if j != i:
+                    m[i] = j
+            self._atom_maps[pid] = m
+        return m
+
+    def task_map(self, pid: int) -> dict[int, int]:
+        m = self._task_maps.get(pid)
+        if m is None:
+            ren = self.rename(pid)
+            idx = self.g.task_index
+            m = {}
+            for t, parts in self._task_parts.items():
+                u = idx.get(self._name_map(parts, ren))
+                if u is None:
+                    raise NotSymmetric(f"task {self.g.task_names[t]} has no image")
+                if u != t:
+                    m[t] = u
+            self._task_maps[pid] = m
+        return m
+
+    def label(self, pid: int, text: str) -> str:
+        """A move label or a message with the objects renamed."""
+        if pid == 0:
+            return text
+        ren = self.rename(pid)
+        return _TOKEN.sub(lambda mt: ren.get(mt.group(0), mt.group(0)), text)
+
+    # -- applying a permutation ---------------------------------------------------------------
+    def state(self, pid: int, s: int) -> int:
+        moved = s & self.movable_mask
+        if pid == 0 or not moved:
+            return s
+        m = self.atom_map(pid)
+        out = s & ~self.movable_mask
+        while moved:
+            low = moved & -moved
+            i = low.bit_length() - 1
+            out |= 1 << m.get(i, i)
+            moved ^= low
+        return out
+
+    def agenda(self, pid: int, ag: Agenda) -> Agenda:
+        if pid == 0 or not ag:
+            return ag
+        m = self.task_map(pid)
+        out: list[int] = []
+        for t in ag:  # no blocks: partial order turns the reduction off (detect)
+            assert isinstance(t, int)
+            out.append(m.get(t, t))
+        return tuple(out)
+
+    def worlds(self, pid: int, ws: Worlds) -> Worlds:
+        return normalize((self.state(pid, s), self.agenda(pid, a)) for s, a in ws)
+
+    def apply(self, pid: int, es: EState) -> EState:
+        """The epistemic state ``es`` with its objects renamed by ``pid``."""
+        if pid == 0:
+            return es
+        return es._replace(true=self.state(pid, es.true),
+                           robot_agenda=self.agenda(pid, es.robot_agenda),
+                           human_agenda=self.agenda(pid, es.human_agenda),
+                           worlds=self.worlds(pid, es.worlds))
+
+    # -- canonical form -----------------------------------------------------------------------
+    def _state_sig(self, s: int) -> list[list[int]]:
+        """Per movable object, the roles of its true atoms in ``s`` (sorted)."""
+        r = self._sig.get(s)
+        if r is None:
+            r = [[] for _ in self.objects]
+            moved = s & self.movable_mask
+            roles = self._atom_roles
+            while moved:
+                low = moved & -moved
+                for o, role in roles[low.bit_length() - 1]:
+                    r[o].append(role)
+                moved ^= low
+            for x in r:
+                x.sort()
+            self._sig[s] = r
+        return r
+
+    def _agenda_sig(self, ag: Agenda) -> list[list[tuple[int, int]]]:
+        """Per movable object, (position, role) of the agenda's tasks naming it."""
+        r = self._ag_sig.get(ag)
+        if r is None:
+            r = [[] for _ in self.objects]
+            roles = self._task_roles
+            for pos, t in enumerate(ag):
+                assert isinstance(t, int)
+                for o, role in roles.get(t, ()):
+                    r[o].append((pos, role))
+            self._ag_sig[ag] = r
+        return r
+
+    def canon(self, es: EState) -> tuple[EState, int]:
+        """The canonical representative of ``es`` and the permutation that maps ``es`` to it.
+
+        Sort roles, never enumerate permutations (docs/semantics.md §3, "Symmetry")::
+
+            canon(s):
+                for each object o that has an interchangeable twin:
+                    sig[o] = (roles of o's true atoms in T,
+                              (position, role) of the tasks naming o in either agenda,
+                              the sorted multiset, over the worlds (S, tn) of W, of
+                                  (roles of o's true atoms in S, tasks naming o in tn))
+                for each class C (its objects in name order c_1 < ... < c_n):
+                    sort C by sig, stably (equal signatures keep name order)
+                    rename the k-th object of that order to c_k
+                return (s renamed, the renaming)
+
+        A role names an atom or task with ``o`` as "self" and every other interchangeable
+        object by its class, so a renaming maps signatures onto signatures: renamed states
+        get equal signatures, hence the same canonical form, unless two objects tie without
+        being interchangeable (then the stable order decides, and two members of one orbit may
+        keep two representatives: less reduction, never a wrong one). Whatever the order,
+        the renaming is a permutation within classes, an automorphism of the problem, so the
+        representative is a real state of the same value (§3)."""
+        tsig = self._state_sig(es.true)
+        rsig = self._agenda_sig(es.robot_agenda)
+        hsig = self._agenda_sig(es.human_agenda)
+        wsigs = [(self._state_sig(s), self._agenda_sig(a)) for s, a in es.worlds]
+        perm: list[int] | None = None
+        for cls in self.classes:
+            keys = []
+            for o in cls:
+                ws = sorted((ss[o], sa[o]) for ss, sa in wsigs)
+                keys.append((tsig[o], rsig[o], hsig[o], ws))
+            order = sorted(range(len(cls)), key=keys.__getitem__)
+            if any(k != j for j, k in enumerate(order)):
+                if perm is None:
+                    perm = list(range(len(self.objects)))
+                for rank, k in enumerate(order):
+                    perm[cls[k]] = cls[rank]
+        if perm is None:
+            return es, 0
+        pid = self.pid(tuple(perm))
+        return self.apply(pid, es), pid
+
+
+# -- detection ----------------------------------------------------------------------------------
+def fixed_objects(g: Grounded) -> set[str]:
+    """Objects the problem names (docs/semantics.md §3): never renamed."""
+    p = g.problem
+    out = set(p.domain.constants)
+    names: list[str] = []
+    for _, args in [*p.robot_agenda, *p.human_agenda]:
+        out.update(args)
+    for w in p.beliefs:
+        for _, args in w.robot_agenda or ():
+            out.update(args)
+    for _, (_, args) in p.goal:
+        out.update(args)
+    names.extend(p.after)
+    names.extend(k for k in p.costs.actions if "(" in k)
+    names.extend(k for k in p.objective.weights if "(" in k)
+    for text in names:
+        out.update(_TOKEN.findall(text))
+    return out
+
+
+def detect(g: Grounded) -> Symmetry | None:
+    """The classes of interchangeable objects of ``g`` (docs/semantics.md §3), or None when
+    there is none (or the problem uses a feature the reduction does not cover: partially
+    ordered methods)."""
+    models = _models(g)
+    for m in models:
+        for ms in m.methods.values():
+            if any(x.order is not None for x in ms):
+                return None
+    fixed = fixed_objects(g)
+    p = g.problem
+    by_type: dict[str, list[str]] = {}
+    for t, objs in p.objects.items():
+        for o in objs:
+            if o not in fixed:
+                by_type.setdefault(t, []).append(o)
+    cands = [sorted(v) for _, v in sorted(by_type.items()) if len(v) > 1]
+    if not cands:
+        return None
+    # a Symmetry over every candidate gives the renamings to test; the real one is built on
+    # the classes found
+    trial = Symmetry(g, cands)
+    check = _Checker(g, trial, models)
+    classes: list[list[str]] = []
+    for cand in cands:
+        found: list[list[str]] = []
+        for o in cand:
+            for cls in found:
+                if check.swap(cls[0], o):
+                    cls.append(o)
+                    break
+            else:
+                found.append([o])
+        classes.extend(c for c in found if len(c) > 1)
+    if not classes:
+        return None
+    return Symmetry(g, classes)
+
+
+def _models(g: Grounded) -> list[GModel]:
+    ms = [g.robot, g.human]
+    if g.robot_seen_by_human is not g.robot:
+        ms.append(g.robot_seen_by_human)
+    return ms
+
+
+class _Checker:
+    """Whether swapping two objects maps the ground problem onto itself."""
+
+    def __init__(self, g: Grounded, sym: Symmetry, models: list[GModel]) -> None:
+        self.g, self.sym, self.models = g, sym, models
+        self.formula_of = {id(fn): f for f, fn in g.fns.items()}
+
+    def swap(self, a: str, b: str) -> bool:
+        sym = self.sym
+        p = list(range(len(sym.objects)))
+        i, j = sym.index[a], sym.index[b]
+        p[i], p[j] = j, i
+        pid = sym.pid(tuple(p))
+        try:
+            amap, tmap = sym.atom_map(pid), sym.task_map(pid)
+            return self._same(pid, amap, tmap)
+        except (KeyError, NotSymmetric):
+            return False
+
+    def _same(self, pid: int, amap: dict[int, int], tmap: dict[int, int]) -> bool:
+        g, sym = self.g, self.sym
+
+        def st(s: int) -> int:
+            return sym.state(pid, s)
+
+        def ag(a: Agenda) -> Agenda:
+            return sym.agenda(pid, a)
+
+        def f(x: Formula | None, mapped: bool = True) -> object:
+            return _norm(x, amap if mapped else {})
+
+        def fn(x: Callable[[int], bool], mapped: bool = True) -> object:
+            form = self.formula_of.get(id(x))
+            if form is None:
+                raise NotSymmetric("an uncompiled condition")
+            return f(form, mapped)
+
+        if st(g.init) != g.init or ag(g.robot_agenda) != g.robot_agenda \
+                or ag(g.human_agenda) != g.human_agenda:
+            return False
+        if sorted((st(s), ag(a)) for s, a in g.beliefs) != sorted(g.beliefs):
+            return False
+        for mask in (g.observable_mask, g.inferable_mask, g.hidden_mask, g.multi_mask):
+            if st(mask) != mask:
+                return False
+        if {st(u) for u in g.var_units} != set(g.var_units):
+            return False
+        if {(st(u), k) for u, k in g.counter_max.items()} != set(g.counter_max.items()):
+            return False
+        vis = Counter((fn(v), st(mask)) for v, mask in g.visible)
+        if vis != Counter((fn(v, False), mask) for v, mask in g.visible):
+            return False
+        if f(g.copresent_f) != f(g.copresent_f, False) or f(g.goal_f) != f(g.goal_f, False):
+            return False
+        for m in self.models:
+            for t, op in m.ops.items():
+                o2 = m.ops.get(tmap.get(t, t))
+                if o2 is None or op.cost != o2.cost or st(op.add) != o2.add \
+                        or st(op.dele) != o2.dele or f(op.pre_f) != f(o2.pre_f, False) \
+                        or f(op.done_f) != f(o2.done_f, False):
+                    return False
+                c1 = Counter((fn(c), st(a), st(d)) for c, a, d in op.cond)
+                c2 = Counter((fn(c, False), a, d) for c, a, d in o2.cond)
+                if c1 != c2:
+                    return False
+            for t, ms in m.methods.items():
+                ms2 = m.methods.get(tmap.get(t, t))
+                if ms2 is None:
+                    return False
+                k1 = Counter((f(x.pre_f), ag(x.subtasks), x.order) for x in ms)
+                k2 = Counter((f(x.pre_f, False), x.subtasks, x.order) for x in ms2)
+                if k1 != k2:
+                    return False
+            for t, (df, _) in m.done.items():
+                d2 = m.done.get(tmap.get(t, t))
+                if d2 is None or f(df) != f(d2[0], False):
+                    return False
+            for t in m.ops.keys() | m.methods.keys() | m.done.keys():
+                u = tmap.get(t, t)
+                if (t in m.ops, t in m.methods, t in m.done) != \
+                        (u in m.ops, u in m.methods, u in m.done):
+                    return False
+        return True
+
+
+def _norm(f: Formula | None, amap: dict[int, int]) -> object:
+    """A ground formula as a comparable value, atoms renamed by ``amap``, conjunctions and
+    disjunctions as sets (ground quantifiers list objects in name order)."""
+    if f is None:
+        return None
+    if isinstance(f, GAtom):
+        return amap.get(f.index, f.index)
+    if isinstance(f, GTest):
+        return ("test", _norm(f.body, amap))
+    if isinstance(f, Not):
+        return ("not", _norm(f.arg, amap))
+    if isinstance(f, And):
+        return ("and", frozenset(_norm(a, amap) for a in f.args))
+    if isinstance(f, Or):
+        return ("or", frozenset(_norm(a, amap) for a in f.args))
+    raise NotSymmetric(f"a ground formula of kind {type(f).__name__}")
+
+
+# -- semantics that notice order-dependent decisions ---------------------------------------------
+class SymSemantics(Semantics):
+    """The transition rules, unchanged, plus a watch on the two decisions taken by index or
+    name order (docs/semantics.md §3, "Symmetry"): ``unsafe`` says why the search over
+    canonical states may not stand for the renamed states (the planner then solves again
+    without symmetry)."""
+
+    def __init__(self, g: Grounded, sym: Symmetry) -> None:
+        super().__init__(g)
+        self.sym = sym
+        self.watch = True
+        self.unsafe = ""
+
+    def observe(self, t: int, worlds: Worlds, mask: int) -> Worlds:
+        if self.watch and not self.unsafe and mask & self.sym.movable_mask:
+            self._check_observe(t, worlds, mask)
+        return super().observe(t, worlds, mask)
+
+    def _check_observe(self, t: int, worlds: Worlds, mask: int) -> None:
+        """§2 observes unit by unit in index order. The order cannot matter when at most one
+        unit varies between the worlds, or when some world agrees with ``t`` on every unit
+        that varies: a unit on which the worlds agree is kept or revised the same way in any
+        order (it touches its own bits only), and the varying ones are then filters that
+        keep exactly the worlds agreeing on all of them. Otherwise, if a varying unit names
+        an interchangeable object, a renaming may reorder them: unsafe."""
+        varying = 0
+        count = 0
+        for u in self.g.units(mask):
+            part = u & mask
+            first = worlds[0][0] & part
+            if any(s & part != first for s, _ in worlds):
+                varying |= part
+                count += 1
+        if count < 2 or not varying & self.sym.movable_mask:
+            return
+        tv = t & varying
+        if any(s & varying == tv for s, _ in worlds):
+            return
+        self.unsafe = ("a belief revision whose result depends on the order of the atoms "
+                       "observed")
+
+    def _informing_set(self, es: EState) -> int:
+        m = super()._informing_set(es)
+        if m and self.watch and not self.unsafe and self._tied(es, m):
+            self.unsafe = ("an informing set chosen by name among equally good ones that "
+                           "are not each other's image")
+        return m
+
+    def _tied(self, es: EState, chosen: int) -> bool:
+        """Whether another set of the chosen size is as good as ``chosen`` on everything but
+        names (§5), one of them naming an interchangeable object, and telling it leads to a
+        state with another canonical form than telling ``chosen``. When every tied set's
+        state has the same canonical form, whichever set a renamed state picks by name, its
+        ``inform`` leads to a renaming of the same state, of the same value (extraction then
+        takes the real state's own set)."""
+        g, t = self.g, es.true
+        states = states_of(es.worlds)
+        div = 0
+        for s in states:
+            div |= s ^ t
+        cands = g.units(div)
+        size = len(g.units(chosen))
+        hv_t = self.human_view(es.human_agenda, (t,))
+        rv_t = frozenset(op for op, _ in self.R.refine(es.robot_agenda, t))
+        plan = self.comm.relevance == Relevance.PLAN
+
+        def valid(w2: Worlds, want_r: bool) -> bool:
+            if self.human_view(es.human_agenda, states_of(w2)) != hv_t:
+                return False
+            if want_r and self.robot_view(w2) != rv_t:
+                return False
+            return not (plan and self._plans_differ(es.human_agenda, t, w2))
+
+        def rank(m: int, combo: Iterable[int]) -> tuple[int, int]:
+            w2 = self.observe(t, es.worlds, m)
+            return len(w2), -sum(1 for u in combo if t & u or u in g.unit_names)
+
+        w_chosen = self.observe(t, es.worlds, chosen)
+        want_r = valid(w_chosen, True)
+        if not want_r and not valid(w_chosen, False):
+            return True  # not understood: be safe
+        best = rank(chosen, g.units(chosen))
+        movable = self.sym.movable_mask
+        key: EState | None = None
+        for combo in combinations(cands, size):
+            m = 0
+            for u in combo:
+                m |= u
+            if m == chosen:
+                continue
+            w2 = self.observe(t, es.worlds, m)
+            if valid(w2, want_r) and rank(m, combo) == best and (m | chosen) & movable:
+                if key is None:
+                    key = self.sym.canon(self.inform(es, chosen))[0]
+                if self.sym.canon(self.inform(es, m))[0] != key:
+                    return True
+        return False
+
+
+def describe_classes(sym: Symmetry) -> list[list[str]]:
+    return [[sym.objects[i] for i in cls] for cls in sym.classes]
+
+
+__all__ = ["OVERRIDE", "Symmetry", "SymSemantics", "describe_classes", "detect",
+           "fixed_objects"]
