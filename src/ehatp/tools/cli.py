@@ -538,13 +538,14 @@ def main() -> None:
 
 # Other commands live in their own modules and add themselves; imported last so they may
 # import helpers from this module without a circular-import failure.
-from . import bt, execute, render, simulate, sweep  # noqa: E402
+from . import bt, execute, hddl, render, simulate, sweep  # noqa: E402
 
 render.register(app)
 simulate.register(app)
 execute.register(app)
 bt.register(app)
 sweep.register(app)
+hddl.register(app)
 
 if __name__ == "__main__":
     main()

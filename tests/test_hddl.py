@@ -1,0 +1,189 @@
+"""HDDL import (docs/hddl.md): an agent's HTN from an HDDL domain and problem, with what HDDL
+does not say in a sidecar; the report over the domains unified-planning ships (the IPC 2020
+HTN track's) and tests/data/hddl's own."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import ehatp
+from ehatp.model.domain import DomainError
+
+pytest.importorskip("unified_planning", reason="ehatp[hddl] (unified-planning) not installed")
+# unified-planning's reader calls a pyparsing name pyparsing now deprecates
+pytestmark = pytest.mark.filterwarnings("ignore:.*deprecated - use:DeprecationWarning")
+
+from ehatp.tools import hddl  # noqa: E402
+
+DATA = Path(__file__).parent / "data" / "hddl"
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def own(name: str, sidecar: str | None = None) -> hddl.Imported:
+    return hddl.import_hddl(DATA / f"{name}-domain.hddl", DATA / f"{name}-p1.hddl",
+                            sidecar=DATA / sidecar if sidecar else None)
+
+
+def test_a_small_imported_domain_solves_and_validates() -> None:
+    imp = own("transport")
+    p = imp.problem()
+    assert p.robot_agenda == (("top", ()),) and p.human_agenda == ()
+    r = ehatp.solve(p)
+    assert r.status == "solved" and r.policy is not None
+    assert ehatp.validate(p, r.policy).ok
+    # the unordered initial network lets the truck take the parcel where it is first: six
+    # robot actions (the other order needs eight), the human passing in between
+    assert r.policy.cost == 11
+
+
+def test_a_partially_ordered_method_keeps_its_order() -> None:
+    imp = own("rover")
+    assert "order=[(0, 1), (0, 2), (1, 3), (2, 3)]" in imp.source
+    p = imp.problem()
+    r = ehatp.solve(p)
+    assert r.status == "solved" and r.policy is not None
+    assert ehatp.validate(p, r.policy).ok
+    shown = {a for n in r.policy.nodes for a in n.robot_agenda}
+    assert "{picture(r, crater) | sample(r, crater)}" in shown
+
+
+def test_the_hddl_model_may_be_the_humans() -> None:
+    """--agent human: the human does the rover's work, in either order where the method
+    leaves it free, and the policy covers both; the robot has nothing to do."""
+    p = hddl.import_hddl(DATA / "rover-domain.hddl", DATA / "rover-p1.hddl",
+                         agent="human").problem()
+    assert p.robot_agenda == () and p.starts == "human"
+    r = ehatp.solve(p)
+    assert r.status == "solved" and r.policy is not None
+    assert r.policy.leaves > 1  # the human's choices of order are branches of the policy
+    assert ehatp.validate(p, r.policy).ok
+
+
+def test_the_written_module_and_problem_are_what_solve_reads(tmp_path: Path) -> None:
+    out = tmp_path / "toy.py"
+    r = subprocess.run([sys.executable, "-m", "ehatp.tools.cli", "import-hddl",
+                        str(DATA / "transport-domain.hddl"), str(DATA / "transport-p1.hddl"),
+                        "--out", str(out)], capture_output=True, text=True, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert out.is_file() and (tmp_path / "toy.toml").is_file()
+    text = out.read_text(encoding="utf-8")
+    assert "@domain_factory" in text and 'd.type("truck", parent=locatable)' in text
+    compile(text, str(out), "exec")
+    p = ehatp.load(tmp_path / "toy.toml")
+    res = ehatp.solve(p)
+    assert res.policy is not None and res.policy.cost == 11
+    assert ehatp.validate(p, res.policy).ok
+
+
+def test_the_sidecar_says_what_the_human_perceives_and_when_they_are_together() -> None:
+    imp = own("transport", "transport-sidecar.toml")
+    d = imp.domain()
+    assert d.predicates["in"].observability == ehatp.HIDDEN
+    assert d.predicates["at"].observability.kind == "observable"
+    assert str(d.predicates["at"].observability.when) == "?p = a"
+    p = imp.problem(d)
+    assert p.K == 3
+    r = ehatp.solve(p)
+    assert r.status == "solved" and r.policy is not None
+    assert ehatp.validate(p, r.policy).ok
+    # together only while the truck is at a: the human cannot see the robot finish elsewhere
+    side = hddl.read_sidecar(DATA / "transport-sidecar.toml")
+    side.copresence = ["at(t1, a)"]
+    apart = hddl.import_hddl(DATA / "transport-domain.hddl", DATA / "transport-p1.hddl",
+                             sidecar=side).problem()
+    assert str(apart.domain.copresence) == "at(t1, a)"
+    assert ehatp.solve(apart).status == "unsolvable"
+
+
+def test_a_python_sidecar_gives_the_human_a_task(tmp_path: Path) -> None:
+    imp = own("rover", "rover-sidecar.py")
+    p = imp.problem()
+    assert p.human_agenda == (("log", ()),)
+    assert p.domain.predicates["sent"].observability == ehatp.HIDDEN
+    r = ehatp.solve(p)
+    assert r.status == "solved" and r.policy is not None
+    assert ehatp.validate(p, r.policy).ok
+    # written out, the module runs the sidecar from its path relative to the module
+    mod, prob = imp.write(tmp_path / "rover.py")
+    assert "run_sidecar(d, __file__," in mod.read_text(encoding="utf-8")
+    assert ehatp.solve(ehatp.load(prob)).status == "solved"
+
+
+def test_what_cannot_map_is_one_line(tmp_path: Path) -> None:
+    (tmp_path / "d.hddl").write_text(
+        "(define (domain fuel) (:requirements :typing :hierarchy :numeric-fluents)\n"
+        " (:types truck) (:predicates (moved ?t - truck)) (:functions (fuel ?t - truck))\n"
+        " (:task go :parameters (?t - truck))\n"
+        " (:method m :parameters (?t - truck) :task (go ?t) :ordered-subtasks (and (move ?t)))"
+        "\n (:action move :parameters (?t - truck) :precondition (> (fuel ?t) 0)\n"
+        "  :effect (and (moved ?t) (decrease (fuel ?t) 1))))\n", encoding="utf-8")
+    (tmp_path / "p.hddl").write_text(
+        "(define (problem p) (:domain fuel) (:objects t - truck)\n"
+        " (:htn :ordered-subtasks (and (go t))) (:init (= (fuel t) 3)))\n", encoding="utf-8")
+    with pytest.raises(hddl.HddlUnsupported, match="numeric fluent fuel"):
+        hddl.import_hddl(tmp_path / "d.hddl", tmp_path / "p.hddl")
+    r = subprocess.run([sys.executable, "-m", "ehatp.tools.cli", "import-hddl",
+                        str(tmp_path / "d.hddl"), str(tmp_path / "p.hddl")],
+                       capture_output=True, text=True, cwd=tmp_path)
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "numeric fluent" in r.stderr
+    bad = tmp_path / "side.toml"
+    bad.write_text('[observability]\nat = "sometimes"\n', encoding="utf-8")
+    with pytest.raises(hddl.HddlUnsupported, match="sometimes"):
+        hddl.read_sidecar(bad)
+
+
+def test_left_recursion_is_named() -> None:
+    """The IPC's transport reaches a place through itself (get-to before a drive): ehatp
+    refines every task to its first action, so it refuses it and says so."""
+    shipped = {n: (d, p) for n, d, p in hddl.domains_shipped()}
+    d, p = shipped["2020-to-Transport"]
+    with pytest.raises(DomainError, match="decomposes without end"):
+        ehatp.solve(hddl.import_hddl(d, p).problem())
+    row = hddl.check_domain("transport", d, p, timeout=20)
+    assert row.stage == "unmapped" and row.reason.startswith("left recursion")
+
+
+# -- the report over the shipped domains ------------------------------------------------------
+
+# small enough to solve in a few seconds each (the rest: benchmarks/hddl_report.py)
+QUICK = ("2020-to-Blocksworld-GTOHP", "2020-to-Factories-simple", "2020-to-Towers",
+         "2020-po-Satellite", "2020-to-Elevator-Learned-ECAI-16", "2020-to-Robot")
+
+
+def test_every_shipped_domain_maps_or_says_why() -> None:
+    """Every HDDL domain unified-planning ships imports and builds (its domain and problem
+    checked), or fails with one line naming what ehatp cannot express."""
+    shipped = hddl.domains_shipped()
+    assert len(shipped) >= 20  # the IPC 2020 HTN track's domains, one problem each
+    for name, d, p in shipped:
+        try:
+            imp = hddl.import_hddl(d, p)
+            imp.problem().check()
+        except hddl.HddlUnsupported as e:
+            assert "\n" not in str(e) and str(e), name
+
+
+@pytest.mark.parametrize("name", QUICK)
+def test_small_shipped_domains_solve_and_validate(name: str) -> None:
+    shipped = {n: (d, p) for n, d, p in hddl.domains_shipped()}
+    d, p = shipped[name]
+    row = hddl.check_domain(name, d, p, timeout=60)
+    assert row.stage == "validated", row
+
+
+def test_the_report_script_runs(tmp_path: Path) -> None:
+    out = tmp_path / "rows.json"
+    r = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "hddl_report.py"),
+                        "--only", "own/", "--only", "Towers", "--timeout", "30",
+                        "--json", str(out)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    rows = json.loads(out.read_text(encoding="utf-8"))
+    assert {row["name"] for row in rows} >= {"own/transport/p1", "own/rover/p1",
+                                             "ipc/2020-to-Towers"}
+    assert all(row["stage"] == "validated" for row in rows), rows
+    assert "own: 2 domains, 2 map, 2 solve" in r.stdout
