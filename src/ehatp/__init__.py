@@ -42,7 +42,7 @@ if TYPE_CHECKING:
     from .search.planner import Result, solve
     from .tools.executor import ExecutionError, Executor, PolicyMismatch, UncoveredHumanAction
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 
 def validate(problem: Problem, policy: Policy) -> Report:
