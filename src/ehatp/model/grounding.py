@@ -147,7 +147,7 @@ class Grounded:
         human learns of an inferable unit whose value an action changed)."""
         if not m & self.multi_mask:
             return m
-        for i in _bits(m & self.multi_mask):
+        for i in bits(m & self.multi_mask):
             m |= self.unit_of[i]
         return m
 
@@ -155,10 +155,10 @@ class Grounded:
         """§2, §5: the (whole) units ``m`` touches, by their lowest bit: the candidates of an
         informing set, the order of observation."""
         if not m & self.multi_mask:
-            return [1 << i for i in _bits(m)]
+            return [1 << i for i in bits(m)]
         out: list[int] = []
         seen = 0
-        for i in _bits(m):
+        for i in bits(m):
             if not seen >> i & 1:
                 u = self.unit(i)
                 seen |= u
@@ -221,12 +221,12 @@ class Grounded:
         """The true atoms of ``s``, with each variable's value (it is one of its bits) and
         each counter's value (``balls(b1) = 2``, 0 included)."""
         if not self.counter_units:
-            return [self.atoms[i] for i in _bits(s)]
+            return [self.atoms[i] for i in bits(s)]
         return _merge(self, s & ~self.counter_mask(),
                       [(_low(u), self.fact(s, u)) for u in self.counter_units])
 
     def mask_atoms(self, m: int) -> list[str]:
-        return [self.atoms[i] for i in _bits(m)]
+        return [self.atoms[i] for i in bits(m)]
 
     def visible_mask(self, t: int) -> int:
         m = 0
@@ -243,10 +243,11 @@ def _low(m: int) -> int:
 
 def _merge(g: Grounded, m: int, extra: list[tuple[int, str]]) -> list[str]:
     """The names of ``m``'s bits and the ``extra`` (index, text) entries, by index."""
-    return [name for _, name in sorted([*((i, g.atoms[i]) for i in _bits(m)), *extra])]
+    return [name for _, name in sorted([*((i, g.atoms[i]) for i in bits(m)), *extra])]
 
 
-def _bits(m: int) -> Iterable[int]:
+def bits(m: int) -> Iterable[int]:
+    """The indices of the set bits of ``m``, lowest first (the atoms of a mask, §2)."""
     i = 0
     while m:
         if m & 1:

@@ -19,7 +19,7 @@ from itertools import product
 
 from .domain import DomainError
 from .formula import Formula, StateFn, negate
-from .grounding import FINISH, GModel
+from .grounding import FINISH, GModel, bits
 
 MAX_DECOMPOSITION = 64
 """Default of ``[limits] max_decomposition``: nested method applications allowed before the
@@ -68,15 +68,6 @@ Members = list[tuple[int, int]]  # (task id, predecessor mask over the list's po
 def _drop_bit(m: int, i: int) -> int:
     """``m`` without bit ``i``, the bits above it moved down by one."""
     return (m & ((1 << i) - 1)) | ((m >> (i + 1)) << i)
-
-
-def _bits(m: int) -> Iterable[int]:
-    i = 0
-    while m:
-        if m & 1:
-            yield i
-        m >>= 1
-        i += 1
 
 
 def _series(ms: Sequence[tuple[int, int]], ids: list[int]) -> list[list[int]]:
@@ -166,7 +157,7 @@ class Networks:
         predecessor positions smallest, so the order is the network's own (§1)."""
         names = self.names
         loc = {i: k for k, i in enumerate(ids)}
-        preds = [frozenset(loc[j] for j in _bits(ms[i][1]) if j in loc) for i in ids]
+        preds = [frozenset(loc[j] for j in bits(ms[i][1]) if j in loc) for i in ids]
         tasks = [ms[i][0] for i in ids]
         by_name = sorted(range(len(ids)), key=lambda k: names[tasks[k]])
         classes: list[list[int]] = []

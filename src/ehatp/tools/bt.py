@@ -22,7 +22,6 @@ runnable py_trees behaviours live in :mod:`ehatp.tools.bt_py_trees` (``ehatp[bt]
 
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass, field
 from enum import StrEnum
 from pathlib import Path
@@ -33,7 +32,7 @@ import typer
 
 from ..errors import InputError
 from ..policy_format import Policy, PolicyMove
-from .common import check_policy_problem, die, read_policy, user_errors
+from .common import check_policy_problem, read_policy, user_errors, write_output
 
 if TYPE_CHECKING:
     from ..model.problem import Problem
@@ -423,14 +422,7 @@ def export_bt(
             raise InputError(str(policy), "", str(e), "give a policy written by ehatp solve"
                              ) from None
     text = to_btcpp(forest) if fmt is BTFormat.btcpp4 else to_py_trees_source(forest)
-    if out is None:
-        sys.stdout.write(text)
-        return
-    try:
-        out.write_text(text, encoding="utf-8")
-    except OSError as e:
-        die(InputError(str(out), "", f"cannot write ({e.strerror or e})",
-                       "check that the directory exists and is writable").line())
+    write_output(text, out)
 
 
 def register(app: typer.Typer) -> None:

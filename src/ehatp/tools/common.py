@@ -241,3 +241,16 @@ def internal_error(e: BaseException, argv: Sequence[str], debug: bool) -> NoRetu
     typer.echo(f"internal error: {what}; this is a bug in ehatp, not in your input; {where} "
                "(please report it)", err=True)
     raise typer.Exit(EXIT_INTERNAL)
+
+
+def write_output(text: str, out: Path | None) -> None:
+    """Write a command's output to ``out``, or to stdout when it is None; a file that cannot
+    be written is one line and exit 2."""
+    if out is None:
+        sys.stdout.write(text)
+        return
+    try:
+        out.write_text(text, encoding="utf-8")
+    except OSError as e:
+        die(InputError(str(out), "", f"cannot write ({e.strerror or e})",
+                       "check that the directory exists and is writable").line())

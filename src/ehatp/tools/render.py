@@ -17,7 +17,6 @@ import json
 import re
 import shutil
 import subprocess
-import sys
 from collections import deque
 from dataclasses import dataclass, field
 from enum import StrEnum
@@ -29,10 +28,9 @@ from typing import Any
 import graphviz  # type: ignore[import-untyped]
 import typer
 
-from ..errors import InputError
 from ..model.problem import load
 from ..policy_format import Policy, PolicyMove, PolicyNode
-from .common import Commands, check_policy_problem, die, read_policy, user_errors
+from .common import Commands, check_policy_problem, die, read_policy, user_errors, write_output
 
 DEFAULT_MAX_NODES = 400  # more than this and a drawing stops being readable
 COMM_KINDS = ("inform", "ask")
@@ -384,14 +382,7 @@ def render_command(
             die(str(e))
     if notes:
         typer.echo(f"render: {policy}: collapsed: {'; '.join(notes)}", err=True)
-    if out is None:
-        sys.stdout.write(text)
-        return
-    try:
-        out.write_text(text, encoding="utf-8")
-    except OSError as e:
-        die(InputError(str(out), "", f"cannot write ({e.strerror or e})",
-                       "check that the directory exists and is writable").line())
+    write_output(text, out)
 
 
 def register(app: typer.Typer) -> None:
