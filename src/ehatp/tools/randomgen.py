@@ -67,6 +67,7 @@ agreement.py`` and ``tests/test_agreement.py`` both run it through :func:`run`.
 
 from __future__ import annotations
 
+import json
 import multiprocessing
 import random
 import time
@@ -99,6 +100,7 @@ from ..model.options import (
     Speech,
 )
 from ..model.problem import BeliefWorld, Costs, Problem
+from ..policy_format import Policy
 
 ITEMS = ("x", "y")
 Lit = tuple[str, bool]  # ("a0", True), ("mark(?i)", False): "?i" is the item parameter
@@ -1021,7 +1023,8 @@ def check(seed: int, *, determinism: bool | None = None, max_states: int = MAX_S
         status = r.status
         if r.policy is not None:
             stage = "validate"
-            report = validate(prob, r.policy)
+            # from the policy's file text (format v2), as a user's validate would read it
+            report = validate(prob, Policy.from_dict(json.loads(r.policy.to_json())))
             if not report.ok:
                 return out("disagreement", report.message.splitlines()[0])
         if r.status in ("timeout", "state-limit"):
