@@ -56,8 +56,6 @@ def make_domain(turn_before_move: bool = False,
     if encoding not in ENCODINGS:
         raise ValueError(f"encoding must be one of {', '.join(map(repr, ENCODINGS))}, "
                          f"got {encoding!r}")
-    if encoding == "variables":
-        return _with_variables(turn_before_move, human_reach, waypoints)
     if human_reach not in HUMAN_REACH:
         raise ValueError(f"human_reach must be one of {', '.join(map(repr, HUMAN_REACH))}, "
                          f"got {human_reach!r}")
@@ -67,6 +65,8 @@ def make_domain(turn_before_move: bool = False,
     # the name tells the variant, so that a policy file says which model it was planned for
     suffix = ("-turn" if turn_before_move else "") + ("-reach-any" if human_reach == "any" else "")
     suffix += f"-way{waypoints}" if waypoints else ""
+    if encoding == "variables":
+        return _with_variables(turn_before_move, human_reach, waypoints, suffix)
     d = Domain("cubes" + suffix, robot=R, human=H, doc=__doc__ or "")
     Table, Box, Cube = d.type("table"), d.type("box"), d.type("cube")
     d.constant(MT, Table)
@@ -167,16 +167,9 @@ def make_domain(turn_before_move: bool = False,
 
 
 def _with_variables(turn_before_move: bool, human_reach: Literal["fetched", "any"],
-                    waypoints: int) -> Domain:
-    """The same model with state variables (``encoding = "variables"``)."""
-    if human_reach not in HUMAN_REACH:
-        raise ValueError(f"human_reach must be one of {', '.join(map(repr, HUMAN_REACH))}, "
-                         f"got {human_reach!r}")
-    if isinstance(waypoints, bool) or not isinstance(waypoints, int) or waypoints < 0:
-        raise ValueError(f"waypoints must be a whole number of places, 0 or more, "
-                         f"got {waypoints!r}")
-    suffix = ("-turn" if turn_before_move else "") + ("-reach-any" if human_reach == "any" else "")
-    suffix += f"-way{waypoints}" if waypoints else ""
+                    waypoints: int, suffix: str) -> Domain:
+    """The same model with state variables (``encoding = "variables"``); the options are
+    checked by :func:`make_domain`."""
     d = Domain("cubes-vars" + suffix, robot=R, human=H, doc=__doc__ or "")
     Place = d.type("place")
     Table, Box = d.type("table", parent=Place), d.type("box", parent=Place)

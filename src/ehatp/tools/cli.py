@@ -376,6 +376,18 @@ def validate_cmd(
 # --- bench -----------------------------------------------------------------------------------
 
 
+def _write_rows(rows: object, json_out: Path) -> None:
+    """A bench's rows as JSON, to ``json_out`` or to stdout for ``-``."""
+    data = json.dumps(rows, indent=1) + "\n"
+    if str(json_out) == "-":
+        typer.echo(data, nl=False)
+        return
+    try:
+        json_out.write_text(data, encoding="utf-8")
+    except OSError as e:
+        die(f"{json_out}: cannot write ({e.strerror or e}); choose another --json file")
+
+
 @bench_app.command("table1")
 def bench_table1(
     json_out: Annotated[Path | None, typer.Option(
@@ -417,14 +429,7 @@ def bench_table1(
         if status is not None:
             status.stop()
     if json_out is not None:
-        data = json.dumps(rows, indent=1) + "\n"
-        if str(json_out) == "-":
-            typer.echo(data, nl=False)
-        else:
-            try:
-                json_out.write_text(data, encoding="utf-8")
-            except OSError as e:
-                die(f"{json_out}: cannot write ({e.strerror or e}); choose another --json file")
+        _write_rows(rows, json_out)
     if str(json_out) != "-":
         from rich.console import Console
 
@@ -504,14 +509,7 @@ def bench_scaling(
         if status is not None:
             status.stop()
     if json_out is not None:
-        data = json.dumps(rows, indent=1) + "\n"
-        if str(json_out) == "-":
-            typer.echo(data, nl=False)
-        else:
-            try:
-                json_out.write_text(data, encoding="utf-8")
-            except OSError as e:
-                die(f"{json_out}: cannot write ({e.strerror or e}); choose another --json file")
+        _write_rows(rows, json_out)
     if str(json_out) != "-":
         typer.echo(bench_mod.format_scaling(rows), nl=False)
     if plot is not None and not bench_mod.plot_scaling({"this run": rows}, str(plot)):
