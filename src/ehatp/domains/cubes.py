@@ -37,7 +37,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from ..model.domain import Domain, TaskRef, domain_factory, for_each, observable
+from ..model.domain import Domain, Operator, TaskRef, domain_factory, for_each, observable
 from ..model.formula import TRUE, Formula, Var, eq, exists, forall
 
 R, H = "R", "H"
@@ -134,12 +134,8 @@ def make_domain(turn_before_move: bool = False,
                          effects=[at(H, t2), facing(H, t2), ~at(H, t1), ~facing(H, t1)])
 
     def go(src: Var | str, dst: Var | str) -> list[TaskRef]:
-        if not waypoints:
-            return ([turn(src, dst)] if turn_before_move else []) + [move(src, dst)]
-        # through the waypoints, in order; src and dst are then the two tables, by name
-        path = route if src == MT else route[::-1]
-        return [step for u, v in zip(path, path[1:], strict=False)
-                for step in ([turn(u, v)] if turn_before_move else []) + [move(u, v)]]
+        return _trip(turn if turn_before_move else None, move, route if waypoints else [],
+                     src, dst)
 
     h_org = hm.task("organize", done=goal())
     h_away = hm.task("put_away", c)
@@ -164,6 +160,18 @@ def make_domain(turn_before_move: bool = False,
         hm.method(h_away, "carry", pre=holding(H, c) & at(H, OT),
                   subtasks=[*go(OT, MT), h_away(c)])
     return d
+
+
+def _trip(turn: Operator | None, move: Operator, route: list[str], src: Var | str,
+          dst: Var | str) -> list[TaskRef]:
+    """The human's steps from ``src`` to ``dst``: one ``move`` (after a ``turn`` when turning
+    breaks sight), or one per leg through the waypoints of ``route``, in order (``src`` and
+    ``dst`` are then the two tables, by name)."""
+    legs: list[tuple[Var | str, Var | str]] = [(src, dst)]
+    if route:
+        path = route if src == MT else route[::-1]
+        legs = list(zip(path, path[1:], strict=False))
+    return [step for u, v in legs for step in ([turn(u, v)] if turn else []) + [move(u, v)]]
 
 
 def _with_variables(turn_before_move: bool, human_reach: Literal["fetched", "any"],
@@ -239,11 +247,8 @@ def _with_variables(turn_before_move: bool, human_reach: Literal["fetched", "any
                          effects=[at(H).set(t2), facing(H).set(t2)])
 
     def go(src: Var | str, dst: Var | str) -> list[TaskRef]:
-        if not waypoints:
-            return ([turn(src, dst)] if turn_before_move else []) + [move(src, dst)]
-        path = route if src == MT else route[::-1]
-        return [step for u, v in zip(path, path[1:], strict=False)
-                for step in ([turn(u, v)] if turn_before_move else []) + [move(u, v)]]
+        return _trip(turn if turn_before_move else None, move, route if waypoints else [],
+                     src, dst)
 
     h_org = hm.task("organize", done=goal())
     h_away = hm.task("put_away", c)

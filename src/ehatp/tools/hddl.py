@@ -803,15 +803,21 @@ class _Converter:
         conds = [*me.preconditions, *me.non_temporal_constraints()]
         pre += self.conj(conds, env) if not pre else [self.atomic(c, env) for c in conds]
         calls, order = self.network(me, env, where)
-        args = [self.names.get("task", task.name), _q(me.name)]
-        if own:
-            args.append(f"params=[{', '.join(own)}]")
+        self.lines.append(self.method_line(self.names.get("task", task.name), me.name, own,
+                                           pre, calls, order))
+
+    def method_line(self, task: str, name: str, params: list[str], pre: list[str],
+                    calls: list[str], order: object) -> str:
+        """One ``m.method(...)`` line of the written module."""
+        args = [task, _q(name)]
+        if params:
+            args.append(f"params=[{', '.join(params)}]")
         if pre:
             args.append(f"pre={' & '.join(pre)}")
         args.append(f"subtasks=[{', '.join(calls)}]")
         if order is not None:
             args.append(f"order={order}")
-        self.lines.append(self.wrap("    m.method(", args))
+        return self.wrap("    m.method(", args)
 
     def initial_network(self) -> list[str] | None:
         """The agenda: the initial task network's calls when totally ordered and ground, else
@@ -832,16 +838,8 @@ class _Converter:
         ident = self.names.get("task", top)
         self.notes.append(f"the initial task network is the one method of task {top} (it is "
                           + ("partially ordered" if order is not None else "not ground") + ")")
-        args = [ident, _q(top)]
-        if env:
-            args.append(f"params=[{', '.join(env.values())}]")
-        if pre:
-            args.append(f"pre={' & '.join(pre)}")
-        args.append(f"subtasks=[{', '.join(calls)}]")
-        if order is not None:
-            args.append(f"order={order}")
         self.lines += [f"    {ident} = m.task({_q(top)})  # the initial task network",
-                       self.wrap("    m.method(", args)]
+                       self.method_line(ident, top, list(env.values()), pre, calls, order)]
         return None
 
     def plain(self, call: str) -> str:
