@@ -12,6 +12,8 @@ import pytest
 import ehatp
 from ehatp import HIDDEN, INFERABLE, Domain, DomainError, HumanModel, Var, observable
 from ehatp.check import validator as V
+from ehatp.epistemic.semantics import Semantics
+from ehatp.model.grounding import FINISH, ground_problem
 from ehatp.model.htn import Block, Networks
 
 from .scenarios import labels, problem, walk
@@ -252,6 +254,53 @@ def test_planner_and_validator_build_and_print_networks_alike() -> None:
                         == sem.put(vb, i, _as_validator(sem, rest)))
 
 
+def _big_members(r: random.Random) -> list[tuple[int, int]]:
+    """A network of 7-11 members over 3 task names (more than 720 orders of occurrences):
+    two or three chains, linked here and there."""
+    n = r.randint(7, 11)
+    preds = [0] * n
+    chain = [r.randrange(3) for _ in range(n)]
+    for j in range(n):
+        for i in range(j):
+            if chain[i] == chain[j] or r.random() < 0.1:
+                preds[j] |= 1 << i | preds[i]
+    order = list(range(n))
+    r.shuffle(order)
+    pos = {old: new for new, old in enumerate(order)}
+    out = [(0, 0)] * n
+    for old, new in pos.items():
+        out[new] = (r.randint(0, 2), sum(1 << pos[i] for i in range(n) if preds[old] >> i & 1))
+    return out
+
+
+def test_large_networks_are_ordered_by_rank_alike() -> None:
+    """§1: with more than 720 orders of repeated names, members are ordered by rank; the
+    planner's and the validator's forms agree, and do not depend on the listing order."""
+    d = Domain("nets")
+    for i in range(3):
+        d.robot.action(f"t{i}")
+    p = problem(d, init=[], robot=[f"t{i}" for i in range(3)], objects={})
+    sem = V._Semantics(p)
+    net = Networks(sem.g.task_names)
+    r = random.Random(7)
+    ranked = 0
+    for _ in range(150):
+        ms = _big_members(r)
+        mine = net.normal(ms)
+        ranked += any(isinstance(it, Block) and len(it) > 6 for it in mine)
+        perm = list(range(len(ms)))
+        r.shuffle(perm)
+        at = {old: new for new, old in enumerate(perm)}
+        shuffled = [(ms[old][0], sum(1 << at[i] for i in range(len(ms)) if ms[old][1] >> i & 1))
+                    for old in perm]
+        assert net.normal(shuffled) == mine
+        pairs = {(i, j) for j, (_, m) in enumerate(ms) for i in range(len(ms)) if m >> i & 1}
+        theirs = sem.canon([t for t, _ in ms], pairs)
+        assert _as_validator(sem, mine) == theirs
+        assert net.names_of(mine) == sem.shown(theirs)
+    assert ranked > 50  # the rank rule was exercised, not only small blocks
+
+
 # -- the domain checks the order; the decomposition bound ---------------------------------------
 
 @pytest.mark.parametrize(("order", "says"), [
@@ -265,7 +314,8 @@ def test_a_bad_order_is_a_domain_error(order: list[tuple[int, int]], says: str) 
         shop(order)
 
 
-def looping(limit: int | None = None) -> ehatp.Problem:
+def looping() -> ehatp.Problem:
+    """``deep(a)`` may refine into itself (a loop) or into ``tick(a)``."""
     d = Domain("loop")
     x = Var("x", d.type("thing"))
     count = d.predicate("count", x)
@@ -273,15 +323,63 @@ def looping(limit: int | None = None) -> ehatp.Problem:
     deep = d.robot.task("deep", x)
     d.robot.method(deep, "again", pre=~count(x), subtasks=[deep(x)])
     d.robot.method(deep, "stop", subtasks=[tick(x)])
-    p = problem(d, init=[], robot=["deep(a)"], objects={"thing": ["a"]}, starts="robot")
-    if limit is not None:
-        p.limits = ehatp.Limits(max_decomposition=limit)
+    return problem(d, init=[], robot=["deep(a)"], objects={"thing": ["a"]}, starts="robot")
+
+
+def nesting(depth: int, limit: int) -> ehatp.Problem:
+    """``down(n<depth>)`` nests ``depth`` methods (down(n_k) -> down(n_k-1)) before ``tick``."""
+    d = Domain("nest")
+    N = d.type("num")
+    x, y = Var("x", N), Var("y", N)
+    succ = d.predicate("succ", x, y)
+    zero = d.predicate("zero", x)
+    tick = d.robot.action("tick")
+    down = d.robot.task("down", x)
+    d.robot.method(down, "less", params=[y], pre=succ(y, x), subtasks=[down(y)])
+    d.robot.method(down, "stop", pre=zero(x), subtasks=[tick()])
+    nums = [f"n{i}" for i in range(depth + 1)]
+    p = problem(d, init=["zero(n0)", *(f"succ(n{i}, n{i + 1})" for i in range(depth))],
+                robot=[f"down(n{depth})"], objects={"num": nums}, starts="robot")
+    p.limits = ehatp.Limits(max_decomposition=limit)
     return p
 
 
-def test_a_task_that_decomposes_without_end_names_the_limit() -> None:
-    with pytest.raises(DomainError, match=r"deep\(a\) decomposes without end.*max_decomposition"):
-        ehatp.solve(looping(8))
+def test_a_loop_before_any_action_is_closed() -> None:
+    """§1: ``deep(a)`` met again inside its own refinement before any action is a loop: that
+    way is closed (it could only offer ``tick(a)`` again), so the robot ticks once."""
+    g = ground_problem(looping())
+    sem = Semantics(g)
+    es = sem.initial()
+    opts = sem.R.refine(es.robot_agenda, es.true)
+    assert [(g.task_names[a], rest) for a, rest in opts] == [("tick(a)", ())]
+    r = ehatp.solve(looping())
+    assert r.policy is not None and r.policy.cost == 1
+    assert V.validate(looping(), r.policy).ok
+
+
+def test_a_loop_is_closed_only_inside_its_own_refinement() -> None:
+    """The same task again *after* the first one's refinement is no loop: ``[deep(a),
+    deep(a)]`` where the first is done without an action offers the second's tick."""
+    p = looping()
+    p.domain.robot.method(p.domain.robot.tasks["deep"], "skip", subtasks=[])
+    p.robot_agenda = (("deep", ("a",)), ("deep", ("a",)))
+    g = ground_problem(p)
+    sem = Semantics(g)
+    es = sem.initial()
+    got = sorted((g.task_names[a], len(rest)) for a, rest in sem.R.refine(es.robot_agenda, es.true)
+                 if a != FINISH)
+    assert got == [("tick(a)", 0), ("tick(a)", 1)]  # the second deep(a), or the first
+    vs = V._Semantics(p)
+    theirs = sorted((g.task_names[a], len(rest)) for a, rest in
+                    vs.refine(vs.g.robot, es.robot_agenda, es.true) if a != FINISH)
+    assert theirs == got
+
+
+def test_deep_nesting_names_the_limit() -> None:
+    assert ehatp.solve(nesting(6, 8)).status == "solved"
+    with pytest.raises(DomainError, match=r"down\(n9\) nests more than 8 methods before its "
+                                          r"first action.*max_decomposition"):
+        ehatp.solve(nesting(9, 8))
 
 
 def test_max_decomposition_is_a_problem_limit(tmp_path: Path) -> None:
@@ -333,3 +431,22 @@ def test_the_random_generator_draws_partial_orders() -> None:
     outcomes = [randomgen.check(seed, determinism=True) for seed in with_po[:25]]
     assert not [o for o in outcomes if o.failed], [o for o in outcomes if o.failed]
     assert sum(o.kind == "solved" for o in outcomes) >= 8
+
+
+def test_the_random_generator_draws_loops() -> None:
+    """Some random problems give the robot's (and the human's) task a method that refines
+    the task itself first, some inside a block; planner and validator agree on them."""
+    from ehatp.tools import randomgen
+
+    with_loop, in_block, human = [], 0, 0
+    for seed in range(300):
+        spec = randomgen.draw(seed)
+        loops = [me for m in (spec.robot, spec.human) for me in m.methods if me.name == "loop"]
+        if loops:
+            with_loop.append(seed)
+            in_block += any(me.order is not None for me in loops)
+            human += any(me.task == "chore" for me in spec.human.methods if me.name == "loop")
+    assert 20 <= len(with_loop) <= 80 and in_block and human
+    outcomes = [randomgen.check(seed, determinism=True) for seed in with_loop[:25]]
+    assert not [o for o in outcomes if o.failed], [o for o in outcomes if o.failed]
+    assert sum(o.kind == "solved" for o in outcomes) >= 5

@@ -23,6 +23,7 @@ from the validator's own move costs.
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
@@ -126,6 +127,29 @@ def validate(problem: Problem, policy: Policy) -> Report:
     return _Validator(problem, policy).run()
 
 
+def _orders_up_to_twins(run: list[int], tasks: Sequence[int], keep: list[int],
+                        before: set[tuple[int, int]]) -> list[tuple[int, ...]]:
+    """The orders of ``run``, one of each set that only swaps twins (same task, same tasks
+    before and after it: swapping them gives the same block)."""
+    def twin(i: int) -> tuple[int, frozenset[int], frozenset[int]]:
+        return (tasks[i], frozenset(j for j in keep if (j, i) in before),
+                frozenset(j for j in keep if (i, j) in before))
+
+    seen: set[tuple[tuple[int, frozenset[int], frozenset[int]], ...]] = set()
+    out = []
+    for order in itertools.permutations(run):
+        look = tuple(twin(i) for i in order)
+        if look not in seen:
+            seen.add(look)
+            out.append(order)
+    return out
+
+
+def _strictly_ends(agenda: Agenda, tail: Agenda) -> bool:
+    """Whether ``agenda`` is ``tail`` with something in front of it."""
+    return len(agenda) > len(tail) and agenda[len(agenda) - len(tail):] == tail
+
+
 def _frac(x: object) -> Fraction:
     if isinstance(x, bool):
         raise TypeError("a cost cannot be a bool")
@@ -188,64 +212,78 @@ class _Semantics:
             return (op.done_f, op.done) if op.done_f is not None and op.done is not None else None
         return model.done.get(t)
 
-    def refine(self, model: GModel, agenda: Agenda, s: int) -> list[tuple[int, Agenda]]:
+    def refine(self, model: GModel, agenda: Agenda, s: int,
+               around: frozenset[int] = frozenset()) -> list[tuple[int, Agenda]]:
         """§1: refine(agenda, S): (first primitive action, remaining agenda) pairs; FINISH
-        when the agenda can be completed."""
+        when the agenda can be completed. A task met again at the front while it is being
+        refined (before any action) is a loop, and that way is closed; ``around``: the tasks
+        being refined around ``agenda`` (a block member's)."""
         out: list[tuple[int, Agenda]] = []
 
-        def go(ag: Agenda, depth: int) -> None:
+        def go(ag: Agenda, depth: int, opened: tuple[tuple[int, Agenda], ...]) -> None:
             if depth > 10_000:
                 raise RecursionError("refinement does not terminate")
             if not ag:
                 out.append((FINISH, ()))
                 return
             t, rest = ag[0], ag[1:]
+            # a task opened in front of ``after`` is still being refined while the agenda is
+            # more than ``after``
+            still = tuple((u, after) for u, after in opened if _strictly_ends(ag, after))
+            busy = around | {u for u, _ in still}
             if isinstance(t, Block):
                 # §1 (Partial order): ready tasks that are done are removed first
                 for i in t.ready():
                     done = self.done_of(model, t.tasks[i])
                     if done is not None and done[1](s):
-                        go(self.drop(t, i) + rest, depth + 1)
+                        go(self.drop(t, i) + rest, depth + 1, still)
                         return
                 # then each ready task is refined in its place
                 for i in t.ready():
-                    for a, r in self.refine(model, (t.tasks[i],), s):
+                    for a, r in self.refine(model, (t.tasks[i],), s, frozenset(busy)):
                         if a == FINISH:
-                            go(self.drop(t, i) + rest, depth + 1)
+                            go(self.drop(t, i) + rest, depth + 1, still)
                         else:
                             out.append((a, self.put(t, i, r) + rest))
                 return
             op = model.ops.get(t)
             done = self.done_of(model, t)
             if done is not None and done[1](s):
-                go(rest, depth + 1)
+                go(rest, depth + 1, still)
                 return
             if op is not None:
                 if op.pre(s):
                     out.append((t, rest))
                 return
+            if t in busy:
+                return  # a loop: refined again inside its own refinement
             for m in model.methods.get(t, ()):
                 if m.pre(s):
-                    go(self.subtasks(m) + rest, depth + 1)
+                    go(self.subtasks(m) + rest, depth + 1, (*still, (t, rest)))
 
-        go(agenda, 0)
+        go(agenda, 0, ())
         return _dedupe(out)
 
     def hrefine(self, agenda: Agenda, states: frozenset[int],
-                conds0: tuple[Formula, ...] = ()) -> list[HResult]:
+                conds0: tuple[Formula, ...] = (),
+                around: frozenset[int] = frozenset()) -> list[HResult]:
         """§1: the human's refinement over a set of world states: a condition holding in some
         worlds only goes on in those worlds and is recorded as uncertain (``conds0``: the
-        conditions already found uncertain before ``agenda``)."""
+        conditions already found uncertain before ``agenda``); loops are closed as in
+        :meth:`refine`."""
         model = self.g.human
         out: list[HResult] = []
 
-        def go(ag: Agenda, ws: frozenset[int], conds: tuple[Formula, ...], depth: int) -> None:
+        def go(ag: Agenda, ws: frozenset[int], conds: tuple[Formula, ...], depth: int,
+               opened: tuple[tuple[int, Agenda], ...] = ()) -> None:
             if depth > 10_000:
                 raise RecursionError("refinement does not terminate")
             if not ag:
                 out.append(HResult(FINISH, (), ws, conds))
                 return
             t, rest = ag[0], ag[1:]
+            still = tuple((u, after) for u, after in opened if _strictly_ends(ag, after))
+            busy = around | {u for u, _ in still}
             if isinstance(t, Block):
                 # §1 (Partial order): a ready task done in some worlds is removed in those
                 for i in t.ready():
@@ -255,15 +293,15 @@ class _Semantics:
                     df, dfn = done
                     yes = frozenset(s for s in ws if dfn(s))
                     if yes == ws:
-                        go(self.drop(t, i) + rest, ws, conds, depth + 1)
+                        go(self.drop(t, i) + rest, ws, conds, depth + 1, still)
                         return
                     if yes:
-                        go(self.drop(t, i) + rest, yes, (*conds, df), depth + 1)
+                        go(self.drop(t, i) + rest, yes, (*conds, df), depth + 1, still)
                         ws, conds = ws - yes, (*conds, negate(df))
                 for i in t.ready():
-                    for r in self.hrefine((t.tasks[i],), ws, conds):
+                    for r in self.hrefine((t.tasks[i],), ws, conds, frozenset(busy)):
                         if r.action == FINISH:
-                            go(self.drop(t, i) + rest, r.states, r.conds, depth + 1)
+                            go(self.drop(t, i) + rest, r.states, r.conds, depth + 1, still)
                         else:
                             out.append(HResult(r.action, self.put(t, i, r.rest) + rest,
                                                r.states, r.conds))
@@ -274,21 +312,23 @@ class _Semantics:
                 df, dfn = done
                 yes = frozenset(s for s in ws if dfn(s))
                 if yes == ws:
-                    go(rest, ws, conds, depth + 1)
+                    go(rest, ws, conds, depth + 1, still)
                     return
                 if yes:  # done in some worlds: skip it there, refine it elsewhere
-                    go(rest, yes, (*conds, df), depth + 1)
+                    go(rest, yes, (*conds, df), depth + 1, still)
                     ws, conds = ws - yes, (*conds, negate(df))
             if op is not None:
                 ok = frozenset(s for s in ws if op.pre(s))
                 if ok:
                     out.append(HResult(t, rest, ok, conds if ok == ws else (*conds, op.pre_f)))
                 return
+            if t in busy:
+                return  # a loop: refined again inside its own refinement
             for m in model.methods.get(t, ()):
                 ok = frozenset(s for s in ws if m.pre(s))
                 if ok:
                     go(self.subtasks(m) + rest, ok, conds if ok == ws else (*conds, m.pre_f),
-                       depth + 1)
+                       depth + 1, (*still, (t, rest)))
 
         go(agenda, states, conds0, 0)
         return _dedupe(out)
@@ -344,8 +384,19 @@ class _Semantics:
         for i in keep:
             by_name.setdefault(names[tasks[i]], []).append(i)
         runs = [by_name[n] for n in sorted(by_name)]
+        if math.prod(math.factorial(len(r)) for r in runs) > 720:
+            # too many orders to try: by rank from below, then from above; only the
+            # occurrences whose ranks tie are tried in every order (section 1)
+            low = self.rank(tasks, keep, lambda a, b: (a, b) in before)
+            high = self.rank(tasks, keep, lambda a, b: (b, a) in before)
+            split: list[list[int]] = []
+            for r in runs:
+                for key in sorted({(low[i], high[i]) for i in r}):
+                    split.append([i for i in r if (low[i], high[i]) == key])
+            runs = split
         best: tuple[list[tuple[int, ...]], list[int]] | None = None
-        for choice in itertools.product(*(itertools.permutations(r) for r in runs)):
+        for choice in itertools.product(*(_orders_up_to_twins(r, tasks, keep, before)
+                                          for r in runs)):
             order = [i for run in choice for i in run]
             at = {i: k for k, i in enumerate(order)}
             code = [tuple(sorted(at[j] for j in keep if (j, i) in before)) for i in order]
@@ -353,6 +404,21 @@ class _Semantics:
                 best = (code, order)
         assert best is not None
         return best[1]
+
+    def rank(self, tasks: Sequence[int], keep: list[int],
+             below: Callable[[int, int], bool]) -> dict[int, tuple[int, int]]:
+        """Section 1: each member's rank, ``below(a, b)`` saying a is under b: by the number of
+        members under it, then by (its task's name, the sorted ranks of those under it)."""
+        under = {i: [j for j in keep if below(j, i)] for i in keep}
+        out: dict[int, tuple[int, int]] = {}
+        for level in sorted({len(u) for u in under.values()}):
+            members = [i for i in keep if len(under[i]) == level]
+            key = {i: (self.g.task_names[tasks[i]], sorted(out[j] for j in under[i]))
+                   for i in members}
+            values = sorted({(k[0], tuple(k[1])) for k in key.values()})
+            for i in members:
+                out[i] = (level, values.index((key[i][0], tuple(key[i][1]))))
+        return out
 
     def drop(self, b: Block, i: int) -> Agenda:
         """§1: the block once its task at position ``i`` is done."""
@@ -1058,6 +1124,9 @@ class _Validator:
         tid = g.task_index.get(label)
         op = g.robot.ops.get(tid) if tid is not None else None
         if op is None:
+            if label.partition("(")[0] in self.problem.domain.robot.operators:
+                return (f"{label} is not applicable in T (nor anywhere: no refinement of "
+                        f"{self.name(ROBOT)}'s agenda reaches it)")
             return f"{label} is not an action of {self.name(ROBOT)}"
         if not op.pre(es.true):
             return f"{label} is not applicable in T (its precondition does not hold)"

@@ -9,6 +9,7 @@ world), ``ask`` and ``pass``. Situation assessment runs on every new state.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from itertools import combinations
 from typing import NamedTuple
@@ -66,6 +67,10 @@ def bits_of(m: int) -> list[int]:
     return out
 
 
+def _nothing() -> None:
+    pass
+
+
 class Semantics:
     def __init__(self, g: Grounded) -> None:
         self.g = g
@@ -86,6 +91,14 @@ class Semantics:
         self._cop: dict[int, bool] = {}
         self._succ: dict[World, tuple[World, ...]] = {}
         self._inform: dict[tuple[int, Agenda, Agenda, Worlds], int] = {}
+        self.check: Callable[[], None] = _nothing
+
+    def bound(self, check: Callable[[], None]) -> None:
+        """Have ``check`` called now and then while moves are computed (a time or memory
+        limit raises from it: one expansion can be long, §7 "Search")."""
+        self.check = check
+        for r in (self.R, self.H, self.RH):
+            r.check = check
 
     def follow(self, es: EState, label: str) -> Move:
         """The move of the agent to move whose label is ``label`` (an agent name may lead,
@@ -290,6 +303,7 @@ class Semantics:
             acts = [(self.robot_op(op), rest) for op, rest in self.R.refine(es.robot_agenda, t)
                     if op != FINISH]
         for gop, rest in acts:
+            self.check()
             out.append(Move(ROBOT, ACTION, gop.name, gop.cost,
                             self.robot_exec(es, gop, rest, cop), gop.id))
         forced = not acts or self.human_model.passes == Passes.PROTOTYPE
@@ -319,13 +333,13 @@ class Semantics:
         t2 = op.apply(es.true)
         if cop:
             new: list[World] = []
+            seen_op = self.anticipated_op(op.id)
             for s, ag in es.worlds:
-                for o, r in self.RH.refine(ag, s):
-                    if o == op.id:
-                        new.append((self.anticipated_op(o).apply(s), r))
+                for _, r in self.RH.refine_to(ag, s, op.id):
+                    new.append((seen_op.apply(s), r))
             if not new:  # the human could not have expected it: revise
-                seen, told = self.anticipated_op(op.id), self.attributed(rest)
-                new = [(seen.apply(s), told) for s, _ in es.worlds]
+                told = self.attributed(rest)
+                new = [(seen_op.apply(s), told) for s, _ in es.worlds]
             inf = self.g.expand(es.true ^ t2) & self.g.inferable_mask
             if inf:
                 new = [((s & ~inf) | (t2 & inf), a) for s, a in new]

@@ -6,9 +6,10 @@ order are canonical: the planner's output does not depend on declaration order.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
+from typing import Any, TypeVar
 
 from .domain import (
     AgentModel,
@@ -34,8 +35,10 @@ from .formula import (
     GTest,
     Not,
     StateFn,
+    Term,
     Var,
     compile_ground,
+    free_vars,
     ground,
     negate,
     product,
@@ -94,6 +97,9 @@ class GModel:
     ops: dict[int, GOp] = field(default_factory=dict)
     methods: dict[int, tuple[GMethod, ...]] = field(default_factory=dict)
     done: dict[int, tuple[Formula, StateFn]] = field(default_factory=dict)
+    # grounded on demand: a task reached but not yet grounded is grounded when one of the
+    # three tables is first asked about it; the tables then hold only what was asked for
+    lazy: bool = False
 
 
 @dataclass(eq=False)
@@ -256,12 +262,19 @@ def bits(m: int) -> Iterable[int]:
         i += 1
 
 
-def ground_problem(problem: Problem, check: Callable[[], None] | None = None) -> Grounded:
+def ground_problem(problem: Problem, check: Callable[[], None] | None = None,
+                   ahead: int | None = None) -> Grounded:
     """Ground ``problem`` after checking it (a Problem built in Python is checked as a problem
     file is: unknown predicates, objects or tasks raise InputError, not a KeyError later).
-    ``check`` is called once per ground task (a time or memory limit may raise from it)."""
+    ``check`` is called once per ground task (a time or memory limit may raise from it).
+
+    §1, "Grounding": ``ahead`` tasks per agent model (default ``[limits] ground_ahead``) are
+    grounded before the search; a model that reaches more is grounded the rest of the way on
+    demand, as the refinement reaches its tasks. Task ids then follow the order the search
+    meets tasks in (still deterministic), and object symmetry is not looked for (it needs the
+    whole model)."""
     problem.check()
-    return _Grounder(problem, check).run()
+    return _Grounder(problem, check, ahead).run()
 
 
 def _no_check() -> None:
@@ -269,9 +282,11 @@ def _no_check() -> None:
 
 
 class _Grounder:
-    def __init__(self, problem: Problem, check: Callable[[], None] | None = None) -> None:
+    def __init__(self, problem: Problem, check: Callable[[], None] | None = None,
+                 eager: int | None = None) -> None:
         self.p = problem
         self.check = check or _no_check
+        self.eager = problem.limits.ground_ahead if eager is None else eager
         self.d: Domain = problem.domain
         self.objects = problem.all_objects()
         # each object's own type (a subtype's objects are in their parents' lists too)
@@ -283,16 +298,19 @@ class _Grounder:
         self.task_names: list[str] = []
         self.task_index: dict[str, int] = {}
         self._derived: dict[tuple[str, tuple[str, ...]], Formula] = {}
+        self._offer: dict[_Gen, dict[tuple[str, ...], frozenset[str]]] = {}
 
     # -- atoms --
     def run(self) -> Grounded:
         d, p = self.d, self.p
-        fluent = set()
+        fluent, added = set(), set()
         for model in d.models().values():
             for op in model.operators.values():
                 fluent |= _effect_preds(op.effects)
+                added |= _effect_preds(op.effects, added_only=True)
         for w in p.beliefs:
             fluent |= {a[0] for a in w.true | w.false}
+            added |= {a[0] for a in w.true}
         # predicates, state variables and counters share one namespace, sorted by name
         names = sorted({*d.predicates, *d.variables, *d.counters})
         self.static = {n for n in names if n not in fluent}
@@ -333,6 +351,12 @@ class _Grounder:
         self.atom_index = {a: i for i, a in enumerate(atoms)}
         self.atom_index.update(self.value_index)  # loc(r, mt) reads as loc(r) = mt
         self.init_static = {call_str(n, a) for n, a in p.init if n in self.static}
+        # a predicate nothing makes true (actions only delete it, no world adds it): its
+        # atoms false at the start are false in every state and world (§2), so read FALSE
+        self.shrinking = {n for n in d.predicates if n in fluent and n not in added}
+        self.init_shrinking = {call_str(n, a) for n, a in p.init if n in self.shrinking}
+        # predicates true only where the initial state says (what a binding may be drawn from)
+        self.factual = {n for n in d.predicates if n in self.static or n in self.shrinking}
         self.init_counter = {call_str(n, a[:-1]): int(a[-1]) for n, a in p.init
                              if n in self.static and n in d.counters}
         init = 0
@@ -469,6 +493,8 @@ class _Grounder:
         name = call_str(pred, args)
         if pred in self.static:
             return TRUE if name in self.init_static else FALSE
+        if pred in self.shrinking and name not in self.init_shrinking:
+            return FALSE
         idx = self.atom_index.get(name)
         if idx is None:
             raise DomainError(f"{name}: an argument has the wrong type")
@@ -494,6 +520,20 @@ class _Grounder:
         bits = [GAtom(lo + j, self.atoms[lo + j]) for j in range(c.max.bit_length())]
         body = value_in(bits, {v for v in range(c.max + 1) if test.holds(v)}, c.max)
         return body if body in (TRUE, FALSE) else GTest(body, str(test))
+
+    def offers(self, gen: _Gen) -> dict[tuple[str, ...], frozenset[str]]:
+        """For the static or shrinking atom of ``gen``: the values its free variable takes in
+        the initial state's facts, by the values of its other arguments (built once)."""
+        index = self._offer.get(gen)
+        if index is None:
+            pred, at_v, fixed, terms = gen
+            found: dict[tuple[str, ...], set[str]] = {}
+            for n, fact in self.p.init:
+                if n == pred and len(fact) == len(at_v) + len(fixed) and \
+                        len({fact[k] for k in at_v}) == 1:
+                    found.setdefault(tuple(fact[k] for k in fixed), set()).add(fact[at_v[0]])
+            self._offer[gen] = index = {k: frozenset(x) for k, x in found.items()}
+        return index
 
     def ground_f(self, f: Formula, binding: Mapping[Var, str]) -> Formula:
         return ground(f, binding, self.objects, self.atom, self.compare)
@@ -530,64 +570,18 @@ class _Grounder:
 
     def ground_model(self, model: AgentModel, agendas: Sequence[tuple[int, ...]],
                      estimate: bool = False) -> GModel:
-        """Ground the tasks reachable from ``agendas``. In the human's ``estimate`` of the robot
-        model a task it does not know has no way to be done (the human cannot expect it)."""
+        """Ground the tasks reachable from ``agendas``: ``[limits] ground_ahead`` of them ahead,
+        the rest when first asked for (§1; an estimate is always ground whole, so that
+        "a task it does not know" means one it cannot reach, §4). In the human's
+        ``estimate`` of the robot model a task it does not know has no way to be done (the
+        human cannot expect it)."""
         g = GModel(model.agent)
-        calls: dict[int, tuple[str, tuple[str, ...]]] = {}
-        todo = [t for ag in agendas for t in ag]
-        for t in todo:
-            calls[t] = _split(self.task_names[t])
-        seen: set[int] = set()
-        methods_of: dict[str, list[Method]] = {}
-        for m in model.methods:
-            methods_of.setdefault(m.task.name, []).append(m)
-        while todo:
-            t = todo.pop()
-            if t in seen:
-                continue
-            seen.add(t)
-            self.check()
-            name, args = calls[t]
-            op = model.operators.get(name)
-            if op is not None:
-                b = dict(zip(op.params, args, strict=True))
-                pre_f = self.shown(op.pre, b)
-                add, dele, cond = self.effects(op.effects, b, TRUE)
-                cost = self.p.costs.actions.get(name, _exact(op.cost))
-                done_f = self.ground_f(op.done, b) if op.done is not None else None
-                g.ops[t] = GOp(t, self.task_names[t], name, args, pre_f, self.compile(pre_f),
-                               add, dele, tuple(cond), cost, done_f,
-                               self.compile(done_f) if done_f is not None else None)
-                continue
-            task = model.tasks.get(name)
-            if task is None and estimate:
-                g.methods[t] = ()
-                continue
-            if task is None:
-                raise DomainError(f"{model.agent} has no task or action {name!r}")
-            tb = dict(zip(task.params, args, strict=True))
-            if task.done is not None:
-                df = self.ground_f(task.done, tb)
-                g.done[t] = (df, self.compile(df))
-            gms = []
-            for m in sorted(methods_of.get(name, []), key=lambda m: m.name):
-                for vals in product([self.objects[v.type] for v in m.params]):
-                    b = {**tb, **dict(zip(m.params, vals, strict=True))}
-                    pre_f = self.shown(m.pre, b)
-                    if pre_f == FALSE:
-                        continue
-                    subs = []
-                    for st in m.subtasks:
-                        sargs = tuple(b[a] if isinstance(a, Var) else a for a in st.args)
-                        self._check_subtask(model, st, sargs)
-                        sid = self.task_id(call_str(st.name, sargs))
-                        calls[sid] = (st.name, sargs)
-                        subs.append(sid)
-                        todo.append(sid)
-                    label = f"{m.name}({', '.join(vals)})" if vals else m.name
-                    gms.append(GMethod(f"{name}.{label}", pre_f, self.compile(pre_f),
-                                       tuple(subs), m.predecessors()))
-            g.methods[t] = tuple(gms)
+        mg = _ModelGrounding(self, model, g, estimate)
+        for ag in agendas:
+            for t in ag:
+                mg.mention(t)
+        if not mg.run(None if estimate else self.eager):
+            mg.on_demand()
         return g
 
     def _check_subtask(self, model: AgentModel, st: TaskRef, args: tuple[str, ...]) -> None:
@@ -615,6 +609,8 @@ class _Grounder:
                     raise DomainError(f"effect {e}: {atom.pred} has a value; change it with "
                                       f"{atom.pred}(...).set(...)")
                 g = self.ground_f(atom, b)
+                if g == FALSE and atom.pred in self.shrinking:
+                    continue  # deletes an atom that is never true
                 if not isinstance(g, GAtom):
                     raise DomainError(f"effect {e}: {atom.pred} is not a fluent predicate")
                 bit = 1 << g.index
@@ -685,6 +681,213 @@ class _Grounder:
         return unit, cases
 
 
+_V = TypeVar("_V")
+
+
+class _OnDemand(dict[int, _V]):
+    """A table of a ground model (task id -> entry) that grounds a task reached but not yet
+    grounded (one of ``pending``) before answering about it."""
+
+    __slots__ = ("_pending", "_ground")
+
+    def __init__(self, data: dict[int, _V], pending: set[int],
+                 ground: Callable[[int], None]) -> None:
+        super().__init__(data)
+        self._pending, self._ground = pending, ground
+
+    def get(self, key: int, default: Any = None) -> Any:
+        if key in self._pending:
+            self._ground(key)
+        return dict.get(self, key, default)
+
+    def __getitem__(self, key: int) -> _V:
+        if key in self._pending:
+            self._ground(key)
+        return dict.__getitem__(self, key)
+
+    def __contains__(self, key: object) -> bool:
+        if key in self._pending:
+            self._ground(key)
+        return dict.__contains__(self, key)
+
+
+class _ModelGrounding:
+    """Grounds one agent model task by task (§1): an action's precondition, effects and
+    done-condition; an abstract task's done-condition and its methods, one per binding of
+    their own parameters whose precondition is not false before any action."""
+
+    def __init__(self, gr: _Grounder, model: AgentModel, g: GModel, estimate: bool) -> None:
+        self.gr, self.model, self.g, self.estimate = gr, model, g, estimate
+        self.calls: dict[int, tuple[str, tuple[str, ...]]] = {}
+        self.todo: list[int] = []
+        self.seen: set[int] = set()
+        self.methods_of: dict[str, list[Method]] = {}
+        for m in model.methods:
+            self.methods_of.setdefault(m.task.name, []).append(m)
+        for ms in self.methods_of.values():
+            ms.sort(key=lambda m: m.name)
+        self.pending: set[int] | None = None  # on demand: reached, not yet grounded
+        self._checks: dict[Method, tuple[list[list[Formula]], list[list[_Gen]]]] = {}
+
+    def mention(self, t: int, call: tuple[str, tuple[str, ...]] | None = None) -> None:
+        """Task ``t`` is reached: ground it later (ahead, or on demand)."""
+        if t not in self.calls:
+            self.calls[t] = call or _split(self.gr.task_names[t])
+        self.todo.append(t)
+        if self.pending is not None and t not in self.seen:
+            self.pending.add(t)
+
+    def run(self, limit: int | None) -> bool:
+        """Ground ahead, depth first, until everything reached is grounded (True) or
+        ``limit`` tasks are (False)."""
+        todo, seen = self.todo, self.seen
+        while todo:
+            if limit is not None and len(seen) >= limit:
+                return False
+            t = todo.pop()
+            if t not in seen:
+                self.one(t)
+        return True
+
+    def on_demand(self) -> None:
+        """Make the model's tables ground the rest of the reached tasks when asked."""
+        pending = self.pending = {t for t in self.todo if t not in self.seen}
+        self.todo = []
+        g = self.g
+        g.lazy = True
+        g.ops = _OnDemand(g.ops, pending, self.ask)
+        g.methods = _OnDemand(g.methods, pending, self.ask)
+        g.done = _OnDemand(g.done, pending, self.ask)
+
+    def ask(self, t: int) -> None:
+        """Ground ``t``, a pending task, now."""
+        self.one(t)
+        assert self.pending is not None
+        self.pending.discard(t)
+        self.todo.clear()  # on demand, what ``one`` reached went to ``pending``
+
+    def bindings(self, m: Method, tb: dict[Var, str]) -> Iterator[tuple[str, ...]]:
+        """§1: the bindings of ``m``'s own parameters, in the order of the product of their
+        types' objects, without those a conjunct of ``m``'s precondition folds to false for.
+        Each conjunct is read as soon as its variables are bound, and a positive static
+        literal such as ``neighbour(?l1, ?l2)`` offers only the values the initial state
+        gives it (an index of the facts), so a static relation cuts the enumeration short."""
+        gr = self.gr
+        plan = self._checks.get(m)
+        if plan is None:
+            plan = self._checks[m] = _binding_plan(m, set(tb), gr.factual)
+        checks, gens = plan
+        b = dict(tb)
+        if any(gr.ground_f(c, b) == FALSE for c in checks[0]):
+            return
+        params = m.params
+        domains = [gr.objects[v.type] for v in params]
+        n = len(params)
+        vals: list[str] = []
+
+        def go(i: int) -> Iterator[tuple[str, ...]]:
+            if i == n:
+                yield tuple(vals)
+                return
+            v = params[i]
+            domain: Iterable[str] = domains[i]
+            for gen in gens[i + 1]:
+                want = tuple(b[a] if isinstance(a, Var) else a for a in gen[3])
+                offered = gr.offers(gen).get(want, _NONE)
+                domain = [o for o in domain if o in offered]
+            for o in domain:
+                b[v] = o
+                if all(gr.ground_f(c, b) != FALSE for c in checks[i + 1]):
+                    vals.append(o)
+                    yield from go(i + 1)
+                    vals.pop()
+            b.pop(v, None)
+
+        yield from go(0)
+
+    def one(self, t: int) -> None:
+        """Ground task ``t``, mentioning the subtasks its methods reach."""
+        gr, g, model = self.gr, self.g, self.model
+        gr.check()  # a limit may stop here, before anything changed
+        self.seen.add(t)
+        name, args = self.calls[t]
+        op = model.operators.get(name)
+        if op is not None:
+            b = dict(zip(op.params, args, strict=True))
+            pre_f = gr.shown(op.pre, b)
+            add, dele, cond = gr.effects(op.effects, b, TRUE)
+            cost = gr.p.costs.actions.get(name, _exact(op.cost))
+            done_f = gr.ground_f(op.done, b) if op.done is not None else None
+            dict.__setitem__(g.ops, t, GOp(
+                t, gr.task_names[t], name, args, pre_f, gr.compile(pre_f), add, dele,
+                tuple(cond), cost, done_f, gr.compile(done_f) if done_f is not None else None))
+            return
+        task = model.tasks.get(name)
+        if task is None and self.estimate:
+            dict.__setitem__(g.methods, t, ())
+            return
+        if task is None:
+            raise DomainError(f"{model.agent} has no task or action {name!r}")
+        tb = dict(zip(task.params, args, strict=True))
+        if task.done is not None:
+            df = gr.ground_f(task.done, tb)
+            dict.__setitem__(g.done, t, (df, gr.compile(df)))
+        gms = []
+        for m in self.methods_of.get(name, []):
+            for vals in self.bindings(m, tb):
+                b = {**tb, **dict(zip(m.params, vals, strict=True))}
+                pre_f = gr.shown(m.pre, b)
+                if pre_f == FALSE:
+                    continue
+                subs = []
+                for st in m.subtasks:
+                    sargs = tuple(b[a] if isinstance(a, Var) else a for a in st.args)
+                    gr._check_subtask(model, st, sargs)
+                    sid = gr.task_id(call_str(st.name, sargs))
+                    self.mention(sid, (st.name, sargs))
+                    subs.append(sid)
+                label = f"{m.name}({', '.join(vals)})" if vals else m.name
+                gms.append(GMethod(f"{name}.{label}", pre_f, gr.compile(pre_f),
+                                   tuple(subs), m.predecessors()))
+        dict.__setitem__(g.methods, t, tuple(gms))
+
+
+_Gen = tuple[str, tuple[int, ...], tuple[int, ...], tuple[Term, ...]]
+"""A positive static or shrinking atom offering the values of one variable: (predicate, the
+variable's positions, the other positions, the terms at those)."""
+_NONE: frozenset[str] = frozenset()
+
+
+def _binding_plan(m: Method, bound: set[Var], factual: set[str]
+                  ) -> tuple[list[list[Formula]], list[list[_Gen]]]:
+    """How to enumerate ``m``'s own parameters: the conjuncts of its precondition by the
+    parameter that binds their last variable (entry 0: those the task's arguments bind; entry
+    i + 1: those bound with ``m.params[i]``; a conjunct with any other variable is left to the
+    whole precondition). A positive literal of a ``factual`` predicate (static, or shrinking:
+    true only where the initial state says so) offers that parameter's values instead of
+    being read for each."""
+    parts = list(m.pre.args) if isinstance(m.pre, And) else [m.pre]
+    checks: list[list[Formula]] = [[] for _ in range(len(m.params) + 1)]
+    gens: list[list[_Gen]] = [[] for _ in range(len(m.params) + 1)]
+    where = {v: i + 1 for i, v in enumerate(m.params)}
+    for c in parts:
+        try:
+            vs = free_vars(c)
+        except TypeError:  # a constant: the whole precondition reads it
+            continue
+        if any(v not in where and v not in bound for v in vs):
+            continue
+        at = max((where.get(v, 0) for v in vs), default=0)
+        if at and type(c) is Atom and c.pred in factual:
+            v = m.params[at - 1]
+            at_v = tuple(k for k, a in enumerate(c.args) if a == v)
+            fixed = tuple(k for k, a in enumerate(c.args) if a != v)
+            gens[at].append((c.pred, at_v, fixed, tuple(c.args[k] for k in fixed)))
+        else:
+            checks[at].append(c)
+    return checks, gens
+
+
 def value_in(bits: Sequence[Formula], allowed: set[int], top: int) -> Formula:
     """A formula over a counter's ``bits`` (lowest first) that holds when its value is in
     ``allowed``; values above ``top`` never occur, so they may go either way (Shannon
@@ -714,17 +917,20 @@ def _exact(c: int | float) -> Cost:
     return c if isinstance(c, int) else Fraction(str(c))
 
 
-def _effect_preds(effs: Iterable[Effect]) -> set[str]:
+def _effect_preds(effs: Iterable[Effect], added_only: bool = False) -> set[str]:
+    """The predicates, variables and counters ``effs`` change (``added_only``: those they
+    may make true, or set)."""
     out: set[str] = set()
     for e in effs:
         if isinstance(e, Atom):
             out.add(e.pred)
         elif isinstance(e, Not) and isinstance(e.arg, Atom):
-            out.add(e.arg.pred)
+            if not added_only:
+                out.add(e.arg.pred)
         elif isinstance(e, Assign):
             out.add(e.name)
         elif isinstance(e, When | ForEach):
-            out |= _effect_preds(e.effects)
+            out |= _effect_preds(e.effects, added_only)
     return out
 
 

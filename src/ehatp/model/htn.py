@@ -14,8 +14,10 @@ as before partial order existed, and refining it takes the same path.
 
 from __future__ import annotations
 
+from bisect import bisect_left, bisect_right
 from collections.abc import Callable, Iterable, Sequence
-from itertools import product
+from itertools import permutations, product
+from math import factorial
 
 from .domain import DomainError
 from .formula import Formula, StateFn, negate
@@ -128,6 +130,50 @@ def _orderings(classes: list[list[int]], preds: list[frozenset[int]],
         yield [k for part in parts for k in part]
 
 
+MAX_ORDERINGS = 720
+"""§1: a block whose repeated names allow more orders of their occurrences than this (the
+product of the factorials of their counts) orders them by rank instead of trying them all."""
+
+
+def _ways(classes: list[list[int]]) -> int:
+    n = 1
+    for c in classes:
+        n *= factorial(len(c))
+    return n
+
+
+def _ranks(label: list[str], preds: list[frozenset[int]]) -> list[tuple[int, int]]:
+    """§1: each member's rank from below: members with fewer predecessors first (a
+    predecessor always has fewer, the order being transitively closed); among those with as
+    many, by (name, the sorted ranks of its predecessors), equal keys sharing a rank."""
+    n = len(label)
+    rank: list[tuple[int, int]] = [(0, 0)] * n
+    by_count: dict[int, list[int]] = {}
+    for k in range(n):
+        by_count.setdefault(len(preds[k]), []).append(k)
+    for c in sorted(by_count):
+        keys = {k: (label[k], tuple(sorted(rank[j] for j in preds[k]))) for k in by_count[c]}
+        distinct = sorted(set(keys.values()))
+        at = {key: i for i, key in enumerate(distinct)}
+        for k, key in keys.items():
+            rank[k] = (c, at[key])
+    return rank
+
+
+def _distinct_orders(group: list[int], tasks: list[int], preds: list[frozenset[int]],
+                     succs: list[frozenset[int]]) -> list[list[int]]:
+    """The orders of ``group`` up to twins (same task, predecessors and successors: swapping
+    them changes nothing)."""
+    out: list[list[int]] = []
+    seen: set[tuple[tuple[int, frozenset[int], frozenset[int]], ...]] = set()
+    for perm in permutations(group):
+        sig = tuple((tasks[k], preds[k], succs[k]) for k in perm)
+        if sig not in seen:
+            seen.add(sig)
+            out.append(list(perm))
+    return out
+
+
 class Networks:
     """Canonical forms and printing of partially ordered agendas, for one list of task names
     (§1, "Partial order"). Memoised: the same block changes the same way in every state."""
@@ -168,6 +214,8 @@ class Networks:
                 classes.append([k])
         if len(classes) == len(ids):  # every name once: the order by name is the one
             order = by_name
+        elif _ways(classes) > MAX_ORDERINGS:
+            order = self._ranked(tasks, preds, classes)
         else:
             succs = [frozenset(k for k in range(len(ids)) if j in preds[k])
                      for j in range(len(ids))]
@@ -180,6 +228,47 @@ class Networks:
                     best, order = code, cand
         pos = {k: p for p, k in enumerate(order)}
         return Block(tuple((tasks[k], sum(1 << pos[j] for j in preds[k])) for k in order))
+
+    def _ranked(self, tasks: list[int], preds: list[frozenset[int]],
+                classes: list[list[int]]) -> list[int]:
+        """§1: the members of a block with many occurrences of a name: by name, then by rank
+        from below and from above (:func:`_ranks`); occurrences whose ranks tie in the order
+        that makes their predecessor lists smallest."""
+        names = self.names
+        n = len(tasks)
+        succs = [frozenset(k for k in range(n) if j in preds[k]) for j in range(n)]
+        label = [names[t] for t in tasks]
+        below, above = _ranks(label, preds), _ranks(label, succs)
+        order: list[int] = []
+        for cls in classes:
+            cls = sorted(cls, key=lambda k: (below[k], above[k], k))
+            i = 0
+            while i < len(cls):
+                j = i + 1
+                while j < len(cls) and (below[cls[j]], above[cls[j]]) == \
+                        (below[cls[i]], above[cls[i]]):
+                    j += 1
+                order.extend(cls[i:j])  # ties: settled below
+                i = j
+        # ties (equal ranks) are rare; among their orders, the smallest code
+        ties = [[k for k in cls if (below[k], above[k]) == key]
+                for cls in classes
+                for key in sorted({(below[k], above[k]) for k in cls})]
+        ties = [t for t in ties if len(t) > 1]
+        if not ties:
+            return order
+        best: tuple[tuple[int, ...], ...] | None = None
+        result = order
+        groups = [sorted(t) for t in ties]
+        for choice in product(*(_distinct_orders(g, tasks, preds, succs) for g in groups)):
+            fill = iter([k for g in choice for k in g])
+            members = {k for g in groups for k in g}
+            seq = [next(fill) if k in members else k for k in order]
+            pos = {k: p for p, k in enumerate(seq)}
+            code = tuple(tuple(sorted(pos[j] for j in preds[k])) for k in seq)
+            if best is None or code < best:
+                best, result = code, seq
+        return result
 
     def body(self, subtasks: tuple[int, ...], order: tuple[int, ...] | None) -> Agenda:
         """A method's subtasks as an agenda: as listed (``order`` None: totally ordered), or
@@ -310,15 +399,27 @@ class Refiner:
         self._one: dict[tuple[Agenda, int], tuple[Option, ...]] = {}
         self._all: dict[tuple[Agenda, tuple[int, ...]], tuple[Uncertain, ...]] = {}
         # the subtasks of each method as an agenda (partially ordered ones in canonical form)
-        self._bodies: dict[int, tuple[tuple[StateFn, Formula, Agenda], ...]] = {
-            t: tuple((me.pre, me.pre_f, self.net.body(me.subtasks, me.order)) for me in ms)
-            for t, ms in model.methods.items()}
+        self._bodies: dict[int, tuple[tuple[StateFn, Formula, Agenda], ...]] = {}
+        # called now and then while refining (a time or memory limit may raise from it)
+        self.check: Callable[[], None] = _nothing
+        self._steps = 0
 
-    def _endless(self, t: Item) -> DomainError:
+    def _body(self, t: int) -> tuple[tuple[StateFn, Formula, Agenda], ...]:
+        """The methods of task ``t``, each as (precondition, its formula, its subtasks as an
+        agenda); none for a task this model does not know."""
+        r = self._bodies[t] = tuple((me.pre, me.pre_f, self.net.body(me.subtasks, me.order))
+                                    for me in self.model.methods.get(t, ()))
+        return r
+
+    def _endless(self, t: Item, open_: Open = ()) -> DomainError:
+        """The error for a refinement nested deeper than the limit, naming the outermost task
+        being refined (``open_``), else ``t``."""
+        if open_ and open_[0][1] >= 0:
+            t = open_[0][0]
         what = self.task_names[t] if isinstance(t, int) else self.net.text(t)
-        return DomainError(f"task {what} decomposes without end (more than {self.limit} "
-                           "nested methods; raise [limits] max_decomposition if that is "
-                           "expected)")
+        return DomainError(f"task {what} nests more than {self.limit} methods before its "
+                           "first action; raise [limits] max_decomposition if that is "
+                           "expected")
 
     def _done_of(self, t: int) -> tuple[Formula, StateFn] | None:
         """§1: the done-condition of task ``t``: its operator's, or its abstract task's."""
@@ -339,7 +440,17 @@ class Refiner:
             r = self._one[key] = tuple(sorted(out))
         return r
 
-    def _go(self, agenda: Agenda, s: int, out: set[Option], depth: int) -> None:
+    def refine_to(self, agenda: Agenda, s: int, op: int) -> tuple[Option, ...]:
+        """§1: the refinements of ``agenda`` in ``s`` whose first action is ``op`` (those of
+        :meth:`refine`, in its order; found by bisection, since an agenda may have many)."""
+        r = self.refine(agenda, s)
+        lo = bisect_left(r, op, key=_first)
+        return r[lo:bisect_right(r, op, lo, key=_first)]
+
+    def _go(self, agenda: Agenda, s: int, out: set[Option], depth: int,
+            open_: Open = ()) -> None:
+        """Refine ``agenda``; ``open_``: the tasks being refined around it, each with the
+        length of what followed it (still being refined while the agenda is longer)."""
         m = self.model
         while True:
             if not agenda:
@@ -347,7 +458,7 @@ class Refiner:
                 return
             t = agenda[0]
             if isinstance(t, Block):
-                self._go_block(t, agenda[1:], s, out, depth)
+                self._go_block(t, agenda[1:], s, out, depth, open_)
                 return
             op = m.ops.get(t)
             if op is not None:
@@ -362,23 +473,34 @@ class Refiner:
                 agenda = agenda[1:]
                 continue
             break
+        n = len(agenda)
+        open_ = tuple(e for e in open_ if e[1] < n)  # those whose part is done are closed
+        if any(u == t for u, _ in open_):
+            return  # §1: refined again inside its own refinement: a loop, closed
         if depth > self.limit:
-            raise self._endless(t)
+            raise self._endless(t, open_)
+        self._steps += 1
+        if not self._steps & 1023:
+            self.check()
         rest = agenda[1:]
+        inner = (*open_, (t, n - 1))
         # a task this model does not know gives nothing: the agent is blocked on it
-        for pre, _, body in self._bodies.get(t, ()):
+        for pre, _, body in self._bodies.get(t) or self._body(t):
             if pre(s):
-                self._go(body + rest, s, out, depth + 1)
+                self._go(body + rest, s, out, depth + 1, inner)
 
-    def _go_block(self, b: Block, rest: Agenda, s: int, out: set[Option], depth: int) -> None:
+    def _go_block(self, b: Block, rest: Agenda, s: int, out: set[Option], depth: int,
+                  open_: Open = ()) -> None:
         """§1 (Partial order): a ready member that is done is skipped first; then every ready
-        member is refined in place (its first action, the block with what is left of it)."""
+        member is refined in place (its first action, the block with what is left of it).
+        ``open_``: the tasks being refined around the block (:data:`Open`)."""
         net = self.net
+        around = _around(open_, 1 + len(rest))
         for i, (t, preds) in enumerate(b):
             if not preds:
                 d = self._done_of(t)
                 if d is not None and d[1](s):
-                    self._go(net.without(b, i) + rest, s, out, depth)
+                    self._go(net.without(b, i) + rest, s, out, depth, open_)
                     return
         if depth > self.limit:
             raise self._endless(b)
@@ -386,10 +508,10 @@ class Refiner:
             if preds:
                 continue
             sub: set[Option] = set()
-            self._go((t,), s, sub, depth + 1)
+            self._go((t,), s, sub, depth + 1, around)
             for a, r in sub:
                 if a == FINISH:  # the member finished without an action: go on with the rest
-                    self._go(net.without(b, i) + rest, s, out, depth + 1)
+                    self._go(net.without(b, i) + rest, s, out, depth + 1, open_)
                 else:
                     out.add((a, net.replace(b, i, r) + rest))
 
@@ -410,7 +532,8 @@ class Refiner:
 
     def _go_all(self, agenda: Agenda, states: tuple[int, ...], ws: int,
                 conds: tuple[Formula, ...],
-                out: dict[tuple[int, Agenda, tuple[Formula, ...]], int], depth: int) -> None:
+                out: dict[tuple[int, Agenda, tuple[Formula, ...]], int], depth: int,
+                open_: Open = ()) -> None:
         m = self.model
         if not agenda:
             key: tuple[int, Agenda, tuple[Formula, ...]] = (FINISH, (), conds)
@@ -418,15 +541,17 @@ class Refiner:
             return
         t = agenda[0]
         rest = agenda[1:]
+        n = len(agenda)
         if isinstance(t, Block):
-            self._go_all_block(t, rest, states, ws, conds, out, depth)
+            self._go_all_block(t, rest, states, ws, conds, out, depth, open_)
             return
         op = m.ops.get(t)
         if op is not None:
             if op.done is not None and op.done_f is not None:
                 dw = _holds(op.done, states, ws)
                 if dw:
-                    self._go_all(rest, states, dw, _add(conds, op.done_f, dw != ws), out, depth)
+                    self._go_all(rest, states, dw, _add(conds, op.done_f, dw != ws), out, depth,
+                                 open_)
                 ws2 = ws & ~dw
                 if not ws2:
                     return
@@ -441,28 +566,33 @@ class Refiner:
         if d is not None:
             dw = _holds(d[1], states, ws)
             if dw:
-                self._go_all(rest, states, dw, _add(conds, d[0], dw != ws), out, depth)
+                self._go_all(rest, states, dw, _add(conds, d[0], dw != ws), out, depth, open_)
             ws2 = ws & ~dw
             if not ws2:
                 return
             conds = _add(conds, negate(d[0]), dw != 0)
             ws = ws2
+        open_ = tuple(e for e in open_ if e[1] < n)  # those whose part is done are closed
+        if any(u == t for u, _ in open_):
+            return  # §1: refined again inside its own refinement: a loop, closed
         if depth > self.limit:
-            raise self._endless(t)
-        for pre, pre_f, body in self._bodies.get(t, ()):
+            raise self._endless(t, open_)
+        inner = (*open_, (t, n - 1))
+        for pre, pre_f, body in self._bodies.get(t) or self._body(t):
             mw = _holds(pre, states, ws)
             if mw:
                 self._go_all(body + rest, states, mw, _add(conds, pre_f, mw != ws), out,
-                             depth + 1)
+                             depth + 1, inner)
 
     def _go_all_block(self, b: Block, rest: Agenda, states: tuple[int, ...], ws: int,
                       conds: tuple[Formula, ...],
                       out: dict[tuple[int, Agenda, tuple[Formula, ...]], int],
-                      depth: int) -> None:
+                      depth: int, open_: Open = ()) -> None:
         """§1 (Partial order, over worlds): a ready member done in some worlds is skipped in
         those (the condition uncertain if not in all) and kept in the others; then every ready
         member is refined in place."""
         net = self.net
+        around = _around(open_, 1 + len(rest))
         for i, (t, preds) in enumerate(b):
             if preds:
                 continue
@@ -472,7 +602,7 @@ class Refiner:
             dw = _holds(d[1], states, ws)
             if dw:
                 self._go_all(net.without(b, i) + rest, states, dw, _add(conds, d[0], dw != ws),
-                             out, depth)
+                             out, depth, open_)
                 ws &= ~dw
                 if not ws:
                     return
@@ -483,13 +613,33 @@ class Refiner:
             if preds:
                 continue
             sub: dict[tuple[int, Agenda, tuple[Formula, ...]], int] = {}
-            self._go_all((t,), states, ws, conds, sub, depth + 1)
+            self._go_all((t,), states, ws, conds, sub, depth + 1, around)
             for (a, r, c), w in sub.items():
                 if a == FINISH:
-                    self._go_all(net.without(b, i) + rest, states, w, c, out, depth + 1)
+                    self._go_all(net.without(b, i) + rest, states, w, c, out, depth + 1, open_)
                 else:
                     k = (a, net.replace(b, i, r) + rest, c)
                     out[k] = out.get(k, 0) | w
+
+
+Open = tuple[tuple[int, int], ...]
+"""The tasks being refined around a point of a refinement (§1, "Refinement"): each with the
+length of the agenda that followed it when it was opened, so that it is still being refined
+while the agenda is longer; -1 marks one being refined around a block member."""
+
+
+def _around(open_: Open, n: int) -> Open:
+    """For a member of a block at the front of an agenda of length ``n``: the tasks of
+    ``open_`` still being refined there, each around the whole of the member's refinement."""
+    return tuple((u, -1) for u, k in open_ if k < n)
+
+
+def _nothing() -> None:
+    pass
+
+
+def _first(o: Option) -> int:
+    return o[0]
 
 
 class Uncertain(tuple[int, Agenda, int, tuple[Formula, ...]]):

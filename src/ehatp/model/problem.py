@@ -62,6 +62,9 @@ class Limits:
     max_decomposition: int = 64
     # search over states up to interchangeable objects (docs/semantics.md §3, "Symmetry")
     symmetry: bool = True
+    # ground tasks per agent model grounded before the search; the rest when the refinement
+    # reaches them (docs/semantics.md §1, "Grounding")
+    ground_ahead: int = 1_000
 
 
 @dataclass(frozen=True)
@@ -172,7 +175,7 @@ _TABLE_KEYS: dict[str, frozenset[str]] = {
     "agenda": frozenset({"robot", "human"}),
     "costs": frozenset({"inform", "ask", "wait", "pass", "actions"}),
     "limits": frozenset({"timeout", "max_states", "max_depth", "max_memory",
-                         "max_decomposition", "symmetry"}),
+                         "max_decomposition", "symmetry", "ground_ahead"}),
     **OPTION_KEYS,
 }
 _TOP_TABLES = {"problem", "domain", "objects", "init", "beliefs", "agenda", "costs", "limits",
@@ -486,6 +489,8 @@ def loads(text: str, path: str | Path, overrides: Mapping[str, Any] | None = Non
         max_decomposition=_int(r, "[limits] max_decomposition",
                                l_t.get("max_decomposition", Limits.max_decomposition)),
         symmetry=_flag(r, "[limits] symmetry", l_t.get("symmetry", Limits.symmetry)),
+        ground_ahead=_int(r, "[limits] ground_ahead",
+                          l_t.get("ground_ahead", Limits.ground_ahead), least=0),
     )
     human, communication, objective, notes = read_options(r, data)
     after = tuple(r.strings("[problem] after", prob.get("after", [])))
@@ -537,9 +542,10 @@ def _override(file: str, data: dict[str, Any], dotted: str, value: Any) -> None:
     table[keys[-1]] = copy.deepcopy(value)  # the loader may consume what it reads
 
 
-def _int(r: _Reader, place: str, v: Any) -> int:
-    if isinstance(v, bool) or not isinstance(v, int) or v <= 0:
-        raise r.err(place, f"expected a whole number > 0, got {_show(v)}", "write e.g. 1000")
+def _int(r: _Reader, place: str, v: Any, least: int = 1) -> int:
+    if isinstance(v, bool) or not isinstance(v, int) or v < least:
+        raise r.err(place, f"expected a whole number {'> 0' if least == 1 else f'>= {least}'}"
+                    f", got {_show(v)}", "write e.g. 1000")
     return v
 
 

@@ -195,6 +195,7 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
     early_stop = grounded.problem.objective.kind == ObjectiveKind.WORST_CASE
     sym = detect(grounded) if symmetry else None
     sem = Semantics(grounded) if sym is None else SymSemantics(grounded, sym)
+    sem.bound(budget.check)
     gr = Graph(sem)
     root_state = sem.initial()
     for i, label in enumerate(grounded.problem.after):

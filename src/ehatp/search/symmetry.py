@@ -342,8 +342,10 @@ def fixed_objects(g: Grounded) -> set[str]:
 def detect(g: Grounded) -> Symmetry | None:
     """The classes of interchangeable objects of ``g`` (docs/semantics.md §3), or None when
     there is none (or the problem uses a feature the reduction does not cover: partially
-    ordered methods)."""
+    ordered methods; a model too large to ground ahead, ``[limits] ground_ahead``)."""
     models = _models(g)
+    if any(m.lazy for m in models):  # grounded on demand: the whole model is not known
+        return None
     for m in models:
         for ms in m.methods.values():
             if any(x.order is not None for x in ms):

@@ -259,9 +259,12 @@ class LiveWorst:
 def _positive_costs(gr: Graph) -> bool:
     """Whether every move but the robot's ``silence`` costs more than 0 (see LiveWorst)."""
     g = gr.sem.g
-    c = g.problem.costs
+    c, d = g.problem.costs, g.problem.domain
     return (min(c.inform, c.ask, c.wait, c.pass_) > 0
-            and all(op.cost > 0 for m in (g.robot, g.human) for op in m.ops.values()))
+            and all(op.cost > 0 for m in (g.robot, g.human) for op in m.ops.values())
+            and all(c.actions.get(name, op.cost) > 0  # on demand: the ops not grounded yet
+                    for m, lifted in ((g.robot, d.robot), (g.human, d.human)) if m.lazy
+                    for name, op in lifted.operators.items()))
 
 
 def expected_order(gr: Graph, root: int, worst: list[Cost | float], pos: list[int],

@@ -902,8 +902,7 @@ class Row:
 def check_domain(name: str, domain_file: str | Path, problem_file: str | Path, *,
                  timeout: float = 60.0, max_states: int = 1_000_000) -> Row:
     """Import, solve (the robot alone, the human's agenda empty) and validate one HDDL
-    domain and problem: the report's row. A domain ehatp refuses to refine (a task that
-    decomposes without end before its first action, i.e. left recursion) does not map."""
+    domain and problem: the report's row."""
     import time
 
     from ..check.validator import validate
@@ -924,12 +923,7 @@ def check_domain(name: str, domain_file: str | Path, problem_file: str | Path, *
     try:
         r = solve(problem, timeout=timeout, max_states=max_states)
     except DomainError as e:
-        why = report_reason(e)
-        if "decomposes without end" in why:
-            task = why.removeprefix("task ").split(" decomposes without end")[0]
-            why = (f"left recursion: {task} decomposes without end before any action (ehatp "
-                   "refines each task to its first action)")
-        return row("unmapped", why)
+        return row("unmapped", report_reason(e))
     if r.policy is None:
         return row("mapped", report_reason(Exception(r.reason or r.status)), status=r.status,
                    states=int(r.stats.get("distinct", 0)))

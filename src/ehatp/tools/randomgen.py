@@ -34,6 +34,9 @@ What a spec draws (probabilities are per problem unless said otherwise):
 - **Partial order** (:data:`ORDERS`): in 0.3 of the problems, half the methods of two subtasks
   or more get an order: none (0.3) or some of the listed order's pairs, so both agents may
   interleave their subtasks (docs/semantics.md §1).
+- **Loops** (:data:`LOOPS`): in 0.15 of the problems the robot's ``job`` (and the human's
+  ``chore``, 0.5 of those) gets a method that refines the task itself first, then a step
+  (docs/semantics.md §1, "Loops").
 - **State variables and counters** (:data:`VALUES`): in 0.35 of the problems one generic atom
   (two, 0.4) is written as a state variable over 2-3 spots (it holds when the value is ``p1``;
   seen whole, or per value) or as a counter up to 2-3 (it holds when at least 1; an effect
@@ -55,7 +58,8 @@ What a spec draws (probabilities are per problem unless said otherwise):
   and away from the default with probability 0.1 each: the prototype pass rule, a
   non-anticipating human, inform anywhere, speech with action, relevance "plan", no asking,
   the expected objective (with ``pass`` weighted 1/2 one time in ten) and other tie-breaks
-  (0.2).
+  (0.2). Grounding: one problem in five grounds every task on demand (``[limits]
+  ground_ahead = 0``), one in five after 2 tasks, the rest ahead.
 
 Settings are drawn in one place, :data:`SETTINGS`, a dict from ``"table.field"`` to a sampler;
 each is drawn from its own generator (seeded by the seed and the key), so adding a setting
@@ -99,7 +103,7 @@ from ..model.options import (
     Relevance,
     Speech,
 )
-from ..model.problem import BeliefWorld, Costs, Problem
+from ..model.problem import BeliefWorld, Costs, Limits, Problem
 from ..policy_format import Policy
 
 ITEMS = ("x", "y")
@@ -135,6 +139,8 @@ SETTINGS: dict[str, Sampler] = {
     "objective.weights": _weighted([({}, 9), ({"pass": Fraction(1, 2)}, 1)]),
     "objective.ties": _weighted([(DEFAULT_TIES, 8), (("waits", "communications", "length"), 1),
                                  (("length",), 1)]),
+    # tasks grounded before the search, the rest on demand (docs/semantics.md §1, "Grounding")
+    "limits.ground_ahead": _weighted([(Limits.ground_ahead, 3), (0, 1), (2, 1)]),
 }
 """``"table.field"`` -> sampler. Add a problem setting with one line here (and, for a new
 table, one line in :data:`TABLES`); a field not drawn keeps its default."""
@@ -145,6 +151,7 @@ TABLES: dict[str, type | None] = {
     "human": HumanModel,
     "communication": Communication,
     "objective": Objective,
+    "limits": Limits,
 }
 """Each table of :data:`SETTINGS`: the dataclass its fields build, given to :class:`Problem`
 under the table's name (None: the fields are :class:`Problem`'s own)."""
@@ -798,9 +805,45 @@ def draw_values(spec: Spec) -> Spec:
     return replace(spec, values=tuple(out))
 
 
+LOOPS = (0.15, 0.5)
+"""Loops: the share of problems where a task gets a left-recursive method (its own task first,
+then the first step of one of its methods), and the share of those where the human's task gets
+one too (docs/semantics.md §1, "Loops"). Drawn before the orders (a loop may then sit in a
+block), from a generator of its own (see :func:`draw_loops`), so no other draw changes."""
+
+
+def draw_loops(spec: Spec) -> Spec:
+    """``spec`` with the loops of :data:`LOOPS`: the robot's ``job`` (and M_R^H's, when it has
+    one) and maybe the human's ``chore`` get a method ``loop`` that refines the task itself
+    first. Refinement closes such loops, so the intended run still goes through."""
+    share, human = LOOPS
+    r = random.Random(f"{spec.seed}:loops")
+    if r.random() >= share:
+        return spec
+
+    def model(m: ModelSpec | None, task: str) -> ModelSpec | None:
+        if m is None:
+            return None
+        steps = [me.subtasks[0] for me in m.methods
+                 if me.task == task and me.subtasks and "?i" not in me.subtasks[0]]
+        if not steps:
+            return m
+        step = steps[0]
+        return replace(m, methods=(*m.methods, MethodSpec(task, "loop", (), (task, step))))
+
+    robot = model(spec.robot, "job")
+    assert robot is not None
+    spec = replace(spec, robot=robot, robot_seen=model(spec.robot_seen, "job"))
+    if r.random() < human:
+        chore = model(spec.human, "chore")
+        assert chore is not None
+        spec = replace(spec, human=chore)
+    return spec
+
+
 def draw(seed: int) -> Spec:
     """The spec of seed ``seed`` (deterministic)."""
-    return draw_values(draw_orders(_Drawer(seed).spec()))
+    return draw_values(draw_orders(draw_loops(_Drawer(seed).spec())))
 
 
 # --- building ---------------------------------------------------------------------------------
