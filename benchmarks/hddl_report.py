@@ -1,14 +1,16 @@
 """HDDL import report: which HTN domains map to ehatp, solve and validate.
 
     .venv/bin/python benchmarks/hddl_report.py [--timeout S] [--max-states N] [--jobs N]
-        [--only PATTERN ...] [--json FILE]
+        [--only PATTERN ...] [--json FILE] [--expects nothing|plan]
 
 Runs ``ehatp.tools.hddl.check_domain`` on every HDDL domain unified-planning ships with its
 tests (the IPC 2020 HTN track's, one problem each) and on the small ones of tests/data/hddl:
 import (the domain as the robot's HTN, the human with an empty agenda, everything observable,
-always together), solve within ``--timeout`` seconds (grounding included), validate the
-policy. Each domain runs in a child process of its own. Prints one line per domain (the stage
-it reached and, if it stopped short, why, in one line), then how many map, solve and validate.
+always together; by default the robot alone, the human following no plan of it, and with
+``--expects plan`` a human who knows the robot's model), solve within ``--timeout`` seconds
+(grounding included), validate the policy. Each domain runs in a child process of its own.
+Prints one line per domain (the stage it reached and, if it stopped short, why, in one line),
+then how many map, solve and validate.
 docs/hddl.md keeps the figures of a run.
 """
 
@@ -46,22 +48,23 @@ def own_domains() -> list[tuple[str, Path, Path]]:
 
 
 def _child(conn: Connection, name: str, dom: Path, prob: Path, timeout: float,
-           max_states: int) -> None:
+           max_states: int, expects: str) -> None:
     """In a child: say when the domain imported, then send its row."""
     try:
         hddl.import_hddl(dom, prob).problem()
         conn.send(("imported", None))
-        row = hddl.check_domain(name, dom, prob, timeout=timeout, max_states=max_states)
+        row = hddl.check_domain(name, dom, prob, timeout=timeout, max_states=max_states,
+                                expects=expects)
     except Exception as e:  # noqa: BLE001 - a crash is a finding, reported like the others
         row = hddl.Row(name, "unmapped", f"crash: {type(e).__name__}: {hddl.report_reason(e)}")
     conn.send(("row", row))
 
 
 def run_all(todo: list[tuple[str, Path, Path]], timeout: float, max_states: int, jobs: int,
-            grace: float = 30.0) -> Iterator[hddl.Row]:
+            expects: str = "nothing", grace: float = 180.0) -> Iterator[hddl.Row]:
     """Each domain in a child process of its own, ``jobs`` at a time, in order. A child
-    still running ``grace`` seconds after its time limit (a grounding step that does not
-    return to check the clock) is killed, and its row says so."""
+    still running ``grace`` seconds after its time limit (validating a policy takes as
+    long as solving it, and is not limited) is killed, and its row says so."""
     ctx = multiprocessing.get_context("fork")
     pending = list(todo)
     running: list[tuple[str, Any, Connection, float, list[bool]]] = []
@@ -73,7 +76,7 @@ def run_all(todo: list[tuple[str, Path, Path]], timeout: float, max_states: int,
             name, dom, prob = pending.pop(0)
             parent, child = ctx.Pipe(duplex=False)
             proc = ctx.Process(target=_child, args=(child, name, dom, prob, timeout,
-                                                    max_states))
+                                                    max_states, expects))
             proc.start()
             child.close()
             running.append((name, proc, parent, time.monotonic(), [False]))
@@ -119,6 +122,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--only", action="append", metavar="PATTERN",
                     help="domains whose name matches (fnmatch, repeatable)")
     ap.add_argument("--json", metavar="FILE", help="also write the rows as JSON")
+    ap.add_argument("--expects", choices=("nothing", "plan"), default="nothing",
+                    help="what the human expects of the robot (the sidecar's [other] "
+                         "expects): nothing, the robot alone (default); plan, a human who "
+                         "knows the robot's model and follows its possible methods")
     args = ap.parse_args(argv)
     shipped = hddl.domains_shipped()
     if not shipped:
@@ -128,7 +135,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.only:
         todo = [t for t in todo if any(fnmatch.fnmatch(t[0], f"*{pat}*") for pat in args.only)]
     rows: list[hddl.Row] = []
-    for row in run_all(todo, args.timeout, args.max_states, args.jobs):
+    for row in run_all(todo, args.timeout, args.max_states, args.jobs, args.expects):
         rows.append(row)
         cost = f"cost {row.cost}, " if row.cost is not None else ""
         print(f"{row.name:44s} {row.stage:9s} {row.seconds:6.1f} s  {cost}"

@@ -79,6 +79,34 @@ def test_the_written_module_and_problem_are_what_solve_reads(tmp_path: Path) -> 
     assert ehatp.validate(p, res.policy).ok
 
 
+def test_a_human_who_expects_nothing_of_the_robot(tmp_path: Path) -> None:
+    """``[other] expects = "nothing"``: M_R^H is empty, so the human, who sees every action,
+    entertains one world (it follows no plan of the robot's); the same cost, fewer worlds."""
+    side = tmp_path / "side.toml"
+    side.write_text('[other]\nexpects = "nothing"\n', encoding="utf-8")
+    alone = hddl.import_hddl(DATA / "transport-domain.hddl", DATA / "transport-p1.hddl",
+                             sidecar=side)
+    assert "d.robot_seen_by_human = AgentModel(d.robot_name)" in alone.source
+    p = alone.problem()
+    assert not p.domain.robot_seen_by_human.tasks and not p.domain.robot_seen_by_human.operators
+    r, watched = ehatp.solve(p), ehatp.solve(own("transport").problem())
+    assert r.policy is not None and watched.policy is not None
+    assert r.policy.cost == watched.policy.cost == 11
+    assert r.stats["max_worlds"] == 1 < watched.stats["max_worlds"]
+    assert ehatp.validate(p, r.policy).ok
+    # written out, the module says it too, and loads
+    out = tmp_path / "alone.py"
+    alone.write(out)
+    assert ehatp.solve(ehatp.load(tmp_path / "alone.toml")).policy is not None
+    side.write_text('[other]\nexpects = "everything"\n', encoding="utf-8")
+    with pytest.raises(hddl.HddlUnsupported, match="expects = 'everything'"):
+        hddl.read_sidecar(side)
+    side.write_text('[other]\nexpects = "nothing"\n', encoding="utf-8")
+    with pytest.raises(hddl.HddlUnsupported, match="import the robot's model"):
+        hddl.import_hddl(DATA / "transport-domain.hddl", DATA / "transport-p1.hddl",
+                         agent="human", sidecar=side)
+
+
 def test_the_sidecar_says_what_the_human_perceives_and_when_they_are_together() -> None:
     imp = own("transport", "transport-sidecar.toml")
     d = imp.domain()

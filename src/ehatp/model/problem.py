@@ -64,7 +64,7 @@ class Limits:
     symmetry: bool = True
     # ground tasks per agent model grounded before the search; the rest when the refinement
     # reaches them (docs/semantics.md §1, "Grounding")
-    ground_ahead: int = 1_000
+    ground_ahead: int = 5_000
 
 
 @dataclass(frozen=True)

@@ -68,6 +68,10 @@ class Sidecar:
     copresence: list[str] = field(default_factory=list)  # ground literals; [] = always
     other: str = "none"  # the other agent's model: "none" or "same" (the HDDL model too)
     other_agenda: list[str] = field(default_factory=list)
+    # what the human expects of the robot, when the HDDL model is the robot's: "plan" (it
+    # knows the robot's model, M_R^H = M_R, and follows which methods it may be using) or
+    # "nothing" (M_R^H empty: it sees the robot's actions, and expects none)
+    expects: str = "plan"
     problem: dict[str, Any] = field(default_factory=dict)  # [problem] K, starts, name
     limits: dict[str, Any] = field(default_factory=dict)  # [limits] of the problem
     customize: Path | None = None  # a Python sidecar with customize(d), run last
@@ -85,6 +89,9 @@ class Sidecar:
         if self.other not in ("none", "same"):
             raise HddlUnsupported(f"{where}: [other] model = {self.other!r}; use \"none\" or "
                                   "\"same\"")
+        if self.expects not in ("plan", "nothing"):
+            raise HddlUnsupported(f"{where}: [other] expects = {self.expects!r}; use \"plan\" "
+                                  "or \"nothing\"")
         if self.other_agenda and self.other == "none" and self.customize is None:
             raise HddlUnsupported(f"{where}: [other] agenda needs model = \"same\" (or a "
                                   "Python sidecar whose customize(d) gives the other agent "
@@ -95,7 +102,7 @@ _SIDECAR_KEYS = {
     "agents": {"robot", "human"},
     "observability": {"default", "when", "observable", "inferable", "hidden"},
     "copresence": {"when"},
-    "other": {"model", "agenda"},
+    "other": {"model", "agenda", "expects"},
     "problem": {"name", "K", "starts", "description"},
     "limits": {"timeout", "max_states", "max_depth", "max_memory", "max_decomposition",
                "symmetry"},
@@ -155,6 +162,7 @@ def _sidecar_from(data: Mapping[str, Any], where: str, check: bool = True) -> Si
     other = data.get("other", {})
     s.other = str(other.get("model", "none"))
     s.other_agenda = [str(x) for x in other.get("agenda", [])]
+    s.expects = str(other.get("expects", "plan"))
     s.problem = dict(data.get("problem", {}))
     s.limits = dict(data.get("limits", {}))
     if check:
@@ -307,12 +315,17 @@ class Imported:
             name=str(side.get("name", self.problem_name or self.name)), domain=d,
             objects=dict(self.objects),
             init=frozenset(calls(self.init)), robot_agenda=calls(robot),
-            human_agenda=calls(human), beliefs=(BeliefWorld(),),
+            human_agenda=calls(human), beliefs=(self._belief(),),
             starts=str(side.get("starts", self.agent)), K=int(side.get("K", 2)),
             limits=limits, description=str(side.get("description", "")),
             goal=tuple((not g.startswith("not "), calls([g.removeprefix("not ")])[0])
                        for g in self.goal),
             source=f"<hddl {self.name}>")
+
+    def _belief(self) -> BeliefWorld:
+        """The world the human starts in: the truth, and the robot's own agenda, or none
+        when it expects nothing of the robot (``[other] expects``)."""
+        return BeliefWorld(robot_agenda=() if self.sidecar.expects == "nothing" else None)
 
     def problem_toml(self, module_file: str | None = None) -> str:
         """The problem file naming ``module_file`` (beside it) as its domain."""
@@ -342,6 +355,9 @@ class Imported:
         lines += [f"{_q(t)} = {arr(os_)}" for t, os_ in sorted(self.objects.items()) if os_]
         lines += ["", "[init]", f"true = {arr(self.init)}", "", "[agenda]",
                   f"robot = {arr(robot)}", f"human = {arr(human)}"]
+        if self.sidecar.expects == "nothing":
+            lines += ["", "[[beliefs.world]]  # the human expects nothing of the robot",
+                      "robot_agenda = []"]
         if self.sidecar.limits:
             lines += ["", "[limits]"]
             for k, v in sorted(self.sidecar.limits.items()):
@@ -567,6 +583,13 @@ class _Converter:
             other = "human" if self.agent == "robot" else "robot"
             L += ["", f"    # {other}: the same model (the sidecar)",
                   f"    d.{other} = {model}.copy(d.{other}_name)"]
+        if side.expects == "nothing":
+            if self.agent != "robot":
+                raise HddlUnsupported(f"{side.source}: [other] expects is what the human "
+                                      "expects of the robot; import the robot's model to use it")
+            L += ["", "    # the human expects nothing of the robot (the sidecar): it sees what "
+                  "the robot does,", "    # and follows no plan of it",
+                  "    d.robot_seen_by_human = AgentModel(d.robot_name)"]
         goal = self.goal()
         if side.customize is not None:
             L += ["", "    # the Python sidecar's customize(d)",
@@ -600,7 +623,7 @@ class _Converter:
         imports = ["Domain", "Var", "domain_factory"]
         body = "\n".join(ln.split("#")[0] for ln in self.lines)  # code, not comments
         for name in ("TRUE", "FALSE", "eq", "exists", "forall", "when", "for_each",
-                     "observable", "HIDDEN", "INFERABLE"):
+                     "observable", "HIDDEN", "INFERABLE", "AgentModel"):
             if re.search(rf"\b{name}\b", body):
                 imports.append(name)
         lines = [f'"""The HDDL domain {self.name} as ehatp data (generated by `ehatp import-hddl`;',
@@ -900,9 +923,13 @@ class Row:
 
 
 def check_domain(name: str, domain_file: str | Path, problem_file: str | Path, *,
-                 timeout: float = 60.0, max_states: int = 1_000_000) -> Row:
-    """Import, solve (the robot alone, the human's agenda empty) and validate one HDDL
-    domain and problem: the report's row."""
+                 timeout: float = 60.0, max_states: int = 1_000_000,
+                 expects: str = "nothing") -> Row:
+    """Import, solve and validate one HDDL domain and problem as the robot's HTN, the human
+    with an empty agenda, everything observable, always together: the report's row.
+    ``expects`` (the sidecar's ``[other] expects``): "nothing", the robot alone (the human
+    sees its actions and follows no plan of it), or "plan", a human who knows the robot's
+    model and follows which methods it may be using (every world it entertains, §4)."""
     import time
 
     from ..check.validator import validate
@@ -915,7 +942,8 @@ def check_domain(name: str, domain_file: str | Path, problem_file: str | Path, *
         return Row(name, stage, reason, seconds=time.perf_counter() - t0, **kw)
 
     try:
-        problem = import_hddl(domain_file, problem_file).problem()
+        problem = import_hddl(domain_file, problem_file,
+                              sidecar=Sidecar(expects=expects)).problem()
     except (HddlUnsupported, HddlMissing) as e:
         return row("unmapped", report_reason(e))
     except DomainError as e:
