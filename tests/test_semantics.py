@@ -37,6 +37,18 @@ def test_unanticipated_witnessed_action_is_revised_into_belief() -> None:
     assert es.worlds[0][1] == es.robot_agenda  # the human now attributes the real agenda
 
 
+def test_a_task_the_humans_model_of_the_robot_lacks_is_not_attributed() -> None:
+    """§4: the human holds only the tasks M_R^H has an operator, a method or a done-condition
+    for: ``set_secret`` is no action of its model (dropped), ``light`` has a done-condition
+    (kept), also in the initial worlds; the validator reads it alike."""
+    p = problem(lab_domain(human_expects_robot=False), init=HOME,
+                robot=["set_secret(a)", "light"], starts="robot")
+    sem, es = walk(p)
+    assert [sem.g.task_names[t] for _, ag in es.worlds for t in ag] == ["light"]
+    r = ehatp.solve(p)
+    assert r.policy is not None and ehatp.validate(p, r.policy).ok
+
+
 # -- K ----------------------------------------------------------------------------------------
 
 def test_worlds_grow_with_each_unseen_robot_turn_up_to_K_and_not_beyond() -> None:

@@ -596,16 +596,19 @@ class _Semantics:
         """The robot agenda as the human can hold it (section 4): the tasks its model of the
         robot knows; a task M_R^H has no operator, method or done-condition for is dropped."""
         m = self.g.robot_seen_by_human
+
+        def knows(x: int) -> bool:  # an operator, a method or a done-condition for it
+            return x in m.ops or bool(m.methods.get(x)) or x in m.done
+
         out: list[int | Block] = []
         for t in agenda:
             if isinstance(t, Block):  # a block keeps the tasks M_R^H knows (section 1)
-                keep = [p for p, x in enumerate(t.tasks)
-                        if x in m.ops or x in m.methods or x in m.done]
+                keep = [p for p, x in enumerate(t.tasks) if knows(x)]
                 at = {p: k for k, p in enumerate(keep)}
                 out.extend(self.canon([t.tasks[p] for p in keep],
                                       {(at[x], at[y]) for x, y in t.before
                                        if x in at and y in at}))
-            elif t in m.ops or t in m.methods or t in m.done:
+            elif knows(t):
                 out.append(t)
         return tuple(out)
 

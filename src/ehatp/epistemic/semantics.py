@@ -227,7 +227,8 @@ class Semantics:
         m = self.g.robot_seen_by_human
         if m is self.g.robot:
             return agenda
-        return self.net.keep(agenda, lambda t: t in m.ops or t in m.methods or t in m.done)
+        return self.net.keep(agenda,
+                             lambda t: t in m.ops or bool(m.methods.get(t)) or t in m.done)
 
     def successors(self, w: World) -> tuple[World, ...]:
         """The world itself (noop) and every event the human anticipates of the robot there."""
