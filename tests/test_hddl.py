@@ -180,7 +180,13 @@ def test_left_recursion_solves() -> None:
 
 # small enough to solve in a few seconds each (the rest: benchmarks/hddl_report.py)
 QUICK = ("2020-to-Blocksworld-GTOHP", "2020-to-Factories-simple", "2020-to-Towers",
-         "2020-po-Satellite", "2020-to-Elevator-Learned-ECAI-16", "2020-to-Robot")
+         "2020-po-Satellite", "2020-to-Elevator-Learned-ECAI-16", "2020-to-Robot",
+         "2020-to-Transport", "2020-po-Transport", "2020-to-Hiking", "2020-to-Snake",
+         "2020-to-Blocksworld-HPDDL", "2020-to-Multiarm-Blocksworld", "2020-to-Depots",
+         "2020-to-Minecraft-Regular", "2020-to-Rover-GTOHP", "2020-to-AssemblyHierarchical",
+         "2020-to-Logistics-Learned-ECAI-16")
+# a minute or less each on a loaded 2-core machine (grounding on demand, a large search)
+SLOW = ("2020-to-Childsnack", "2020-to-Minecraft-Player", "2020-to-Satellite-GTOHP")
 
 
 def test_every_shipped_domain_maps_or_says_why() -> None:
@@ -201,6 +207,15 @@ def test_small_shipped_domains_solve_and_validate(name: str) -> None:
     shipped = {n: (d, p) for n, d, p in hddl.domains_shipped()}
     d, p = shipped[name]
     row = hddl.check_domain(name, d, p, timeout=60)
+    assert row.stage == "validated", row
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", SLOW)
+def test_larger_shipped_domains_solve_and_validate(name: str) -> None:
+    shipped = {n: (d, p) for n, d, p in hddl.domains_shipped()}
+    d, p = shipped[name]
+    row = hddl.check_domain(name, d, p, timeout=120)
     assert row.stage == "validated", row
 
 
