@@ -147,6 +147,15 @@ def test_memory_error_is_a_clean_stop(monkeypatch: pytest.MonkeyPatch) -> None:
     assert r.stats["expanded"] == 30
 
 
+@pytest.mark.parametrize("limit", [1, 2, 7, 50, 333])
+def test_state_limit_is_never_exceeded(limit: int) -> None:
+    """An expansion that would add one distinct state too many is not made: the search ends
+    with exactly ``max_states`` states (P6 has 208), whatever order it expands in."""
+    r = ehatp.solve(ehatp.load(CUBES / "p6.toml"), max_states=limit, symmetry=False)
+    assert r.status == "state-limit" and not r.optimal
+    assert r.stats["distinct"] == limit and f"({limit} distinct states)" in r.reason
+
+
 def test_memory_limit_below_the_start_stops_at_once() -> None:
     r = ehatp.solve(ehatp.load(CUBES / "p1.toml"), max_memory=1)
     assert r.status == "memory-limit" and r.policy is None

@@ -12,7 +12,8 @@ optimal: a cheaper policy only visits nodes with ``g`` below V, all of which are
 result does not depend on exploration order (values are a least fixpoint). Expected cost has no
 such bound (a cheap mean may hide a long rare branch), so for it the whole reachable graph is
 explored before the values are computed. State, time and memory limits stop either search
-(:mod:`.limits`); the best policy found so far is then returned, not proven optimal.
+(:mod:`.limits`; ``max_states`` is never exceeded, an expansion that would is not made); the
+best policy found so far is then returned, not proven optimal.
 
 Memory: the graph keeps one :class:`EState` per distinct state, with the worlds tuples and true
 states shared between the nodes that have equal ones; an edge keeps the child's id and a move
@@ -237,7 +238,11 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
                 status, reason = "state-limit", f"state limit reached ({stats.distinct} " \
                                                 "distinct states)"
                 break
-            _expand(gr, n, heap, stats, max_depth)
+            _expand(gr, n, heap, stats, max_depth, max_states)
+            if gr.status[n] == OPEN:  # one more state than the limit: n left unexpanded
+                status, reason = "state-limit", f"state limit reached ({stats.distinct} " \
+                                                "distinct states)"
+                break
             if isinstance(sem, SymSemantics) and sem.unsafe:
                 status, reason = "symmetry-unsafe", sem.unsafe
                 break
@@ -271,7 +276,10 @@ def _move_key(m: Move) -> tuple[object, ...]:
 
 
 def _expand(gr: Graph, n: int, heap: list[tuple[Cost, int]], stats: Stats,
-            max_depth: int) -> None:
+            max_depth: int, max_states: int | None = None) -> None:
+    """Expand node ``n``: a goal, a dead end, or its moves as edges (new children queued).
+    Before adding a distinct state past ``max_states`` it stops and leaves ``n`` unexpanded
+    (``OPEN``): the search then ends with at most that many, whatever order it expands in."""
     sem = gr.sem
     es = gr.states[n]
     stats.expanded += 1
@@ -302,6 +310,9 @@ def _expand(gr: Graph, n: int, heap: list[tuple[Cost, int]], stats: Stats,
         c = index.get(child)
         g1 = g0 + m.cost
         if c is None:
+            if max_states is not None and stats.distinct >= max_states:
+                stats.expanded -= 1
+                return
             c = gr.add(child, g1, d0, n)
             stats.distinct += 1
             if len(child.worlds) > stats.max_worlds:
