@@ -1,0 +1,188 @@
+"""A lower bound on the worst-case cost still to pay from an epistemic state (docs/semantics.md
+§7, "Search"), by which the worst-case search expands its nodes: ``f = g + h``, A*-style.
+
+**The bound.** Computed once on the *lifted* models ``M_R`` and ``M_H`` (action and task schemas
+by name), so it is the same for every ground instance of a schema and does not change under a
+renaming of objects (§3, "Symmetry"):
+
+- ``cost(a)`` of an action schema: its cost (``[costs.actions]``, else the domain's), or 0 when
+  it has a done-condition — a done task is skipped for free (§1, "Refinement");
+- ``cost(t)`` of an abstract task: 0 when it has a done-condition, else the least over its
+  methods of the sum of their subtasks' costs; the greatest solution of these equations
+  (iterated down from infinity, so recursion terminates). A task with no method that ever
+  finishes costs infinity: refining it gives nothing, the agent is blocked on it for good;
+- ``count``: the same with every action counting 1 (the least number of actions);
+- an agenda's ``cost`` (``count``): the sum over its tasks, a block's members included (§1,
+  "Partial order").
+
+``h`` of a state is ``R + H``, a bound on the robot's moves plus a bound on the human's:
+
+- ``R = max(cost_R(robot agenda), r * (count_H(human agenda) - [human to move] - [opening]))``
+- ``H = max(cost_H(human agenda), h * (count_R(robot agenda) - [robot to move]))``
+
+where ``r`` is the cheapest robot move other than the opening's ``silence`` (``wait``,
+``inform``, any robot action) and ``h`` the cheapest human move (``pass``, ``ask``, any human
+action); a negative product counts 0.
+
+**Why it is a lower bound** (admissible: ``h(n) <= value(n)`` for every node, §7). Each term
+rests on a rule of docs/semantics.md:
+
+- *The agendas must be finished* (§6: the robot's agenda can finish under ``T``, the human's
+  certainly finishes over ``W``), and *an agenda changes only by its agent's own action*
+  (§4: ``tn_R := rest`` on a robot action, ``tn_H := rest`` on a human action; ``wait``,
+  ``pass``, ``inform``, ``ask`` and the worlds' updates leave both agendas as they are).
+- *Refinement never makes an agenda cheaper than its first action says* (§1): every result
+  ``(a, rest)`` of ``refine`` (in one state, or over the worlds) has
+  ``cost(agenda) <= cost(a) + cost(rest)`` — skipping a done task removes a task of cost 0,
+  a method replaces a task by subtasks costing at least as much (each ground method is an
+  instance of a lifted one, with the same subtask schemas), a block member refined in place
+  keeps the other members (§1, "Partial order") — and a result ``FINISH`` has
+  ``cost(agenda) = 0``. So the robot actions of any path to a goal cost at least
+  ``cost_R`` of the robot's agenda, the human's actions at least ``cost_H`` of the human's,
+  and likewise for ``count``. (The robot's moves that speak while acting cost more than the
+  action, §5.)
+- *The agents alternate* (§4: every robot move gives the turn to the human, every human move
+  to the robot): on a path from a robot node, there are at most one robot move more than human
+  moves; from a human node, at most as many robot moves as human moves. Every move but the
+  opening's ``silence`` (§5, at the root only) costs at least ``r`` (robot) or ``h`` (human).
+  So ``count_R`` robot actions still to do force ``count_R - [robot to move]`` human moves,
+  and ``count_H`` human actions force ``count_H - [human to move]`` robot moves, one of which
+  may be the free ``silence``.
+
+Robot moves and human moves are different moves, so the two bounds add up. Done-conditions
+evaluated in ``T`` or in the worlds, ``ask``, ``inform``, unseen actions and ``K``, counters,
+state variables and every ``[human]`` / ``[communication]`` option leave these arguments
+untouched: nothing here reads a state, only agendas, costs and whose turn it is.
+
+**Consistency** (what the stopping rule needs): along every edge ``n -> c`` of cost ``k``,
+``h(n) <= k + h(c)`` — an action lowers its own agent's ``cost`` by at most its cost and its
+``count`` by at most 1, the other agent's bound only grows (whose turn it is flips), a move
+that changes no agenda lowers only the mover's alternation term, by one move at most. And
+``h = 0`` at a goal. Hence ``f = g + h`` never decreases along a path, the search pops nodes
+in order of ``f``, each with its cheapest ``g`` (see :mod:`.andor` for the stopping rule).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from fractions import Fraction
+
+from ..epistemic.state import ROBOT, EState
+from ..model.domain import AgentModel, Operator
+from ..model.grounding import Grounded
+from ..model.htn import Agenda, Block
+from ..model.problem import Cost
+
+INF = float("inf")
+Bound = Cost | float  # a cost, or INF: no way to finish
+
+OVERRIDE: bool | None = None
+"""When not None, turns the heuristic on (True) or off (False) in every worst-case search whose
+caller does not say (tests and benchmarks compare runs with and without it)."""
+
+
+def least_costs(model: AgentModel, price: Callable[[Operator], Cost]) -> dict[str, Bound]:
+    """§1 ("Refinement"): for each action and abstract task schema of ``model``, by name, a lower
+    bound on what getting it out of an agenda costs: an action's ``price``, or 0 with a
+    done-condition (a done task is skipped); an abstract task 0 with a done-condition, else the
+    least over its methods of the sum of its subtasks' bounds. The greatest solution of these
+    equations, iterated down from INF (INF: no method ever finishes the task, so refining it
+    gives nothing for good). A subtask name the model does not know counts 0 (grounding refuses
+    it, should the method ever be used)."""
+    out: dict[str, Bound] = {}
+    for name, op in model.operators.items():
+        out[name] = 0 if op.done is not None else price(op)
+    for name, t in model.tasks.items():
+        out[name] = 0 if t.done is not None else INF
+    methods = [(m.task.name, tuple(st.name for st in m.subtasks)) for m in model.methods
+               if m.task.done is None]
+    # Bellman-Ford over the AND/OR task graph: after round k every task whose cheapest
+    # decomposition tree is at most k deep has its value; with costs >= 0 a cheapest tree never
+    # repeats a task on a branch, so len(tasks) + 1 rounds see no change
+    for _ in range(len(model.tasks) + 2):
+        changed = False
+        for task, subs in methods:
+            total: Bound = 0
+            for s in subs:
+                total = total + out.get(s, 0)
+            if total < out[task]:
+                out[task] = total
+                changed = True
+        if not changed:
+            return out
+    raise AssertionError("least_costs did not converge")  # pragma: no cover - see above
+
+
+def _exact(c: int | float | Fraction) -> Cost:
+    """A cost as the search adds it: a float becomes the Fraction it reads as (§7)."""
+    return c if isinstance(c, int | Fraction) else Fraction(str(c))
+
+
+class Heuristic:
+    """``h`` of epistemic states (the module's docstring gives the bound and its proof, after
+    docs/semantics.md §1, §4, §5, §6). Computed once per problem on the lifted models; an
+    agenda's cost and count are cached, so ``h`` of a state is two dictionary lookups once its
+    agendas have been seen."""
+
+    def __init__(self, grounded: Grounded) -> None:
+        p = grounded.problem
+        d, c = p.domain, p.costs
+
+        def price(op: Operator) -> Cost:
+            return _exact(c.actions.get(op.name, op.cost))
+
+        def one(op: Operator) -> Cost:
+            return 1
+
+        self._g = grounded  # its task names grow if tasks are grounded on demand
+        self._robot = (least_costs(d.robot, price), least_costs(d.robot, one))
+        self._human = (least_costs(d.human, price), least_costs(d.human, one))
+        # the cheapest move of each agent (§4-§5; the opening's silence apart)
+        self.robot_move: Cost = min([_exact(c.wait), _exact(c.inform),
+                                     *(price(op) for op in d.robot.operators.values())])
+        self.human_move: Cost = min([_exact(c.pass_), _exact(c.ask),
+                                     *(price(op) for op in d.human.operators.values())])
+        self._robot_agendas: dict[Agenda, tuple[Bound, Bound]] = {}
+        self._human_agendas: dict[Agenda, tuple[Bound, Bound]] = {}
+
+    def __call__(self, es: EState) -> Bound:
+        """§6-§7: a lower bound on the worst-case cost from ``es`` to a goal (0 at a goal,
+        INF when an agenda can never finish)."""
+        rc, rn = self._robot_agendas.get(es.robot_agenda) or self.agenda(es.robot_agenda, True)
+        hc, hn = self._human_agendas.get(es.human_agenda) or self.agenda(es.human_agenda, False)
+        robot_turn = es.turn == ROBOT
+        r: Bound = rc
+        if hn and self.robot_move:
+            x = self.robot_move * (hn - (0 if robot_turn else 1) - (1 if es.opening else 0))
+            if x > r:
+                r = x
+        h: Bound = hc
+        if rn and self.human_move:
+            x = self.human_move * (rn - (1 if robot_turn else 0))
+            if x > h:
+                h = x
+        return r + h
+
+    def agenda(self, agenda: Agenda, robot: bool) -> tuple[Bound, Bound]:
+        """§1: the least cost and the least number of actions that finishing ``agenda`` takes
+        its agent (the robot's with ``M_R``, else the human's with ``M_H``): the sums over its
+        tasks, a block's members included."""
+        cache = self._robot_agendas if robot else self._human_agendas
+        r = cache.get(agenda)
+        if r is None:
+            costs, counts = self._robot if robot else self._human
+            names = self._g.task_names
+            cost: Bound = 0
+            count: Bound = 0
+            for item in agenda:
+                for t in ((m for m, _ in item) if isinstance(item, Block) else (item,)):
+                    if t < 0:  # FINISH
+                        continue
+                    schema = names[t].partition("(")[0]
+                    cost = cost + costs.get(schema, 0)
+                    count = count + counts.get(schema, 0)
+            r = cache[agenda] = (cost, count)
+        return r
+
+
+__all__ = ["INF", "OVERRIDE", "Bound", "Heuristic", "least_costs"]
