@@ -5,15 +5,16 @@ every move costs 1, as in the paper's Algorithm 1), with duplicate detection. A 
 when it is a goal, a robot node with a solved child, or a human node whose children are all
 solved; solved labels propagate upwards as they appear (the paper's propagate step).
 
-Stopping rule (§7): for the worst-case objective, once the root is solved its worst-case value V
-is kept up to date as the graph grows (:class:`~.values.LiveWorst`, the same least fixpoint the
-full pass computes). When V is at most the ``g`` of every node expanded so far, the policy is
-optimal: a cheaper policy only visits nodes with ``g`` below V, all of which are expanded. The
-result does not depend on exploration order (values are a least fixpoint). Expected cost has no
-such bound (a cheap mean may hide a long rare branch), so for it the whole reachable graph is
-explored before the values are computed. State, time and memory limits stop either search
-(:mod:`.limits`; ``max_states`` is never exceeded, an expansion that would is not made); the
-best policy found so far is then returned, not proven optimal.
+Stopping rule (§7): for the worst-case objective, the worst-case values are kept up to date from
+the first goal on as the graph grows (:class:`~.values.LiveWorst`, the same least fixpoint the
+full pass computes), so the root's value V is at hand once it is solved. When V is at most the
+``g`` of every node expanded so far, the policy is optimal: a cheaper policy only visits nodes
+with ``g`` below V, all of which are expanded. The result does not depend on exploration order
+(values are a least fixpoint). Expected cost has no such bound (a cheap mean may hide a long
+rare branch), so for it the whole reachable graph is explored before the values are computed.
+State, time and memory limits stop either search (:mod:`.limits`; ``max_states`` is never
+exceeded, an expansion that would is not made); the best policy found so far is then returned,
+not proven optimal.
 
 Memory: the graph keeps one :class:`EState` per distinct state, with the worlds tuples and true
 states shared between the nodes that have equal ones; an edge keeps the child's id and a move
@@ -217,7 +218,7 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
     status, reason = "unsolvable", ""
     values: Values | None = None
     optimal = False
-    live: LiveWorst | None = None  # worst-case values, kept once the root is solved
+    live: LiveWorst | None = None  # worst-case values, kept from the first goal on
     try:
         while heap:
             g, n = heapq.heappop(heap)
@@ -225,7 +226,7 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
                 continue
             if g > level:
                 # every node with g <= level is expanded: the optimum may be proven now
-                if live is not None and live.root_value(root) <= level:
+                if live is not None and gr.solved[root] and live.root_value(root) <= level:
                     status, optimal = "solved", True
                     break
                 level = g
@@ -248,7 +249,9 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
                 break
             if live is not None:
                 live.expanded(n)
-            elif early_stop and gr.solved[root]:
+            elif early_stop and gr.status[n] == GOAL:
+                # from the first goal on, not only once the root is solved: a search ordered
+                # by g + h often solves the root by its very last expansions
                 budget.phase = "search (first worst-case pass)"
                 live = LiveWorst(gr, budget)
                 budget.phase = "search"

@@ -171,8 +171,8 @@ class LiveWorst:
     """§7, "Search": the worst-case values of a graph that grows, kept equal to what
     :func:`knuth` would compute on it now, so the stopping rule reads ``value[root]``.
 
-    Created once the root is solved (one full pass); then :meth:`expanded` after every
-    expansion. Adding a node's edges can only lower values (a robot node gains options, a
+    Created when the search meets its first goal (one full pass); then :meth:`expanded` after
+    every expansion. Adding a node's edges can only lower values (a robot node gains options, a
     human node goes from no value to one), so an update is a Dijkstra-like wave of decreases
     from the expanded node up through its ancestors, in increasing order of the new values,
     each node re-evaluated from its children's current values. When the wave ends every node
