@@ -4,6 +4,7 @@ move costs, and the same policies with it as without it."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -13,6 +14,7 @@ from hypothesis import strategies as st
 import ehatp
 from ehatp import Costs, Domain, Var
 from ehatp.model.grounding import ground_problem
+from ehatp.search import heuristic
 from ehatp.search.andor import GOAL, search
 from ehatp.search.heuristic import INF, Heuristic, least_costs
 from ehatp.search.symmetry import detect
@@ -140,6 +142,49 @@ def test_a_block_counts_every_member() -> None:
     assert Heuristic(sem.g).agenda(es.robot_agenda, robot=True) == (3, 1)  # b; c(o1) is done
 
 
+def test_fewer_states_with_the_bound_same_policy() -> None:
+    p = robot_only(["two", "two", "a(o1)", "ping"])
+    off = search(ground_problem(p), heuristic=False)
+    on = search(ground_problem(p), heuristic=True)
+    assert on.stats.expanded < off.stats.expanded
+    assert on.values is not None and off.values is not None
+    assert on.values.value[on.root] == off.values.value[off.root]
+
+
+# -- the same results -------------------------------------------------------------------------
+
+def _policy(p: ehatp.Problem, on: bool, monkeypatch: pytest.MonkeyPatch,
+            symmetry: bool | None = None) -> tuple[str, str]:
+    """The status and the policy's JSON without its statistics (states counted differ)."""
+    monkeypatch.setattr(heuristic, "OVERRIDE", on)
+    r = ehatp.solve(p, max_states=randomgen.MAX_STATES, timeout=10, symmetry=symmetry)
+    if r.policy is None:
+        return r.status, r.reason
+    data = json.loads(r.policy.to_json())
+    data.pop("stats")
+    return r.status, json.dumps(data, sort_keys=True)
+
+
+@pytest.mark.parametrize("name", TABLE1)
+def test_table1_policies_do_not_change(name: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    p = ehatp.load(ROOT / "examples" / name)
+    for symmetry in (True, False):
+        assert _policy(p, True, monkeypatch, symmetry) == _policy(p, False, monkeypatch,
+                                                                  symmetry)
+
+
+def test_random_policies_do_not_change(monkeypatch: pytest.MonkeyPatch) -> None:
+    compared = 0
+    for seed in range(300):
+        p = randomgen.problem(seed)
+        on, off = _policy(p, True, monkeypatch), _policy(p, False, monkeypatch)
+        if "limit" in on[0] or "limit" in off[0] or on[0] == "timeout" or off[0] == "timeout":
+            continue
+        assert on == off, seed
+        compared += on[0] == "solved"
+    assert compared >= 100
+
+
 def test_the_bound_does_not_change_under_renaming() -> None:
     """Computed on the lifted models, the bound of a state is its canonical form's (§3)."""
     p = ehatp.load(ROOT / "examples" / "cubes" / "x1-4cubes-k2.toml")
@@ -147,7 +192,7 @@ def test_the_bound_does_not_change_under_renaming() -> None:
     sym = detect(g)
     assert sym is not None
     h = Heuristic(g)
-    out = search(g, max_states=2000)
+    out = search(g, max_states=2000, heuristic=False)
     for es in out.graph.states:
         assert h(sym.canon(es)[0]) == h(es)
 
@@ -167,7 +212,7 @@ def test_the_bound_never_overestimates(seed: int) -> None:
     p = randomgen.problem(seed)
     g = ground_problem(p)
     h = Heuristic(g)
-    out = search(g, max_states=randomgen.MAX_STATES, timeout=10)
+    out = search(g, max_states=randomgen.MAX_STATES, timeout=10, heuristic=True)
     gr = out.graph
     if out.status == "solved":
         assert out.values is not None

@@ -1,20 +1,34 @@
 """AND/OR graph search over epistemic states (docs/semantics.md §7, "Search").
 
-Nodes are expanded in order of their cheapest path cost from the root ``g`` (breadth-first when
-every move costs 1, as in the paper's Algorithm 1), with duplicate detection. A node is *solved*
-when it is a goal, a robot node with a solved child, or a human node whose children are all
-solved; solved labels propagate upwards as they appear (the paper's propagate step).
+Nodes are expanded in order of ``f = g + h``: their cheapest path cost from the root ``g`` plus,
+for the worst-case objective, a lower bound ``h`` on the cost still to pay (:mod:`.heuristic`);
+for expected cost ``h = 0``, so the order is ``g``'s, breadth-first when every move costs 1, as
+in the paper's Algorithm 1. Within one ``f``, smaller ``g`` first, then creation order. Duplicates
+are detected. A node is *solved* when it is a goal, a robot node with a solved child, or a human
+node whose children are all solved; solved labels propagate upwards as they appear (the paper's
+propagate step).
 
-Stopping rule (§7): for the worst-case objective, the worst-case values are kept up to date from
-the first goal on as the graph grows (:class:`~.values.LiveWorst`, the same least fixpoint the
-full pass computes), so the root's value V is at hand once it is solved. When V is at most the
-``g`` of every node expanded so far, the policy is optimal: a cheaper policy only visits nodes
-with ``g`` below V, all of which are expanded. The result does not depend on exploration order
-(values are a least fixpoint). Expected cost has no such bound (a cheap mean may hide a long
-rare branch), so for it the whole reachable graph is explored before the values are computed.
-State, time and memory limits stop either search (:mod:`.limits`; ``max_states`` is never
-exceeded, an expansion that would is not made); the best policy found so far is then returned,
-not proven optimal.
+Stopping rule (§7), for the worst-case objective. From the first goal on, the worst-case values
+are kept up to date as the graph grows (:class:`~.values.LiveWorst`, the same least fixpoint the
+full pass computes), so the root's value V is at hand as soon as the root is solved. The search
+stops, the optimum proven, when it is about to expand a node of a new ``f`` level and V is below
+that ``f``. Proof: ``h`` is consistent (``h(n) <= cost + h(c)`` along every edge, and 0 at
+goals), so ``f`` never decreases along a path; nodes leave the queue in order of ``f``, each
+with its cheapest ``g`` ``g*``; when a node of ``f = F`` leaves it, every node the root reaches
+with ``g* + h < F`` has been expanded. Every node ``x`` of a policy of value V' has
+``g*(x) + h(x) <= g(its path in the policy) + value(x) <= V'`` (``h`` is a lower bound, and
+every branch through ``x`` costs at most V'). So a policy cheaper than V would lie wholly in the
+expanded graph, and V, a least fixpoint over that graph, would be at most its cost: there is
+none. Nodes with ``f = V`` are expanded too, which keeps the chosen policy the one a search by
+``g`` alone (``h = 0``) chooses: every node of an optimal policy, and of any option tied with one
+at a node of it, has ``g* + value <= V``, so ``f <= V``; both searches expand those nodes, with
+the same moves, the same values and the same tie keys (§7, "Ties"). Only the states counted
+differ (and, with symmetry, whether an order-dependent decision met in a state only one search
+expands sends it back to full states). Expected cost has no such bound (a cheap mean may hide a
+long rare branch), so for it the whole reachable graph is explored before the values are
+computed. State, time and memory limits stop either search (:mod:`.limits`; ``max_states`` is
+never exceeded, an expansion that would is not made); the best policy found so far is then
+returned, not proven optimal.
 
 Memory: the graph keeps one :class:`EState` per distinct state, with the worlds tuples and true
 states shared between the nodes that have equal ones; an edge keeps the child's id and a move
@@ -35,12 +49,15 @@ from ..errors import InputError
 from ..model.grounding import Grounded
 from ..model.options import ObjectiveKind
 from ..model.problem import Cost
+from . import heuristic as _heuristic
+from .heuristic import Bound, Heuristic
 from .limits import Budget, LimitReached
 from .symmetry import Symmetry, SymSemantics, detect
 from .values import LiveWorst, Values, compute_values
 
 OPEN, EXPANDED, GOAL, DEAD = 0, 1, 2, 3
 KIND_ORDER = {"silence": -1, "action": 0, "inform": 1, "ask": 2, "wait": 3, "pass": 4}
+Entry = tuple[Bound, Cost, int]  # the queue's: (f, g, node id)
 
 
 @dataclass(slots=True)
@@ -168,7 +185,8 @@ Progress = Callable[[Stats, int], None]
 def search(grounded: Grounded, *, timeout: float | None = None, max_states: int | None = None,
            max_depth: int | None = None, progress: Progress | None = None,
            max_memory: int | None = None, budget: Budget | None = None,
-           stats: Stats | None = None, symmetry: bool = False) -> SearchOutcome:
+           stats: Stats | None = None, symmetry: bool = False,
+           heuristic: bool | None = None) -> SearchOutcome:
     """§7: explore from the root until the optimum is proven (worst case), everything
     reachable is explored (expected cost), or a limit is reached; then the values.
 
@@ -178,7 +196,10 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
     the object the search keeps its statistics in. With ``symmetry`` the nodes are canonical
     states (docs/semantics.md §3, "Symmetry"; :mod:`.symmetry`); when a decision taken by
     index or name order makes that unsound the search stops with status
-    ``"symmetry-unsafe"`` (the planner then solves again without it)."""
+    ``"symmetry-unsafe"`` (the planner then solves again without it). ``heuristic`` (default:
+    on, unless :data:`.heuristic.OVERRIDE` says otherwise) orders a worst-case search by
+    ``g + h`` (:mod:`.heuristic`); the policy is the same either way, fewer states are
+    expanded with it."""
     limits = grounded.problem.limits
     max_states = limits.max_states if max_states is None else max_states
     max_depth = limits.max_depth if max_depth is None else max_depth
@@ -195,6 +216,9 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
     budget.phase = "search"
     # worst case: stop as soon as the optimum is proven; expected cost: explore everything
     early_stop = grounded.problem.objective.kind == ObjectiveKind.WORST_CASE
+    if heuristic is None:
+        heuristic = _heuristic.OVERRIDE is not False
+    hfn = Heuristic(grounded) if early_stop and heuristic else None
     sym = detect(grounded) if symmetry else None
     sem = Semantics(grounded) if sym is None else SymSemantics(grounded, sym)
     sem.bound(budget.check)
@@ -213,23 +237,27 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
     root = gr.add(root_state, 0, 0)
     stats.generated = stats.distinct = 1
     stats.max_worlds = len(root_state.worlds)
-    heap: list[tuple[Cost, int]] = [(0, root)]  # by g, then node id (creation order)
-    level: Cost = 0
+    # by f = g + h, then g (within a level as the uniform-cost search would: shallow first),
+    # then node id (creation order)
+    f0 = hfn(root_state) if hfn is not None else 0
+    heap: list[Entry] = [(f0, 0, root)]
+    level: Bound = 0
     status, reason = "unsolvable", ""
     values: Values | None = None
     optimal = False
     live: LiveWorst | None = None  # worst-case values, kept from the first goal on
     try:
         while heap:
-            g, n = heapq.heappop(heap)
+            f, g, n = heapq.heappop(heap)
             if gr.status[n] != OPEN or g > gr.g[n]:
-                continue
-            if g > level:
-                # every node with g <= level is expanded: the optimum may be proven now
-                if live is not None and gr.solved[root] and live.root_value(root) <= level:
+                continue  # expanded already, or reached since by a cheaper path
+            if f > level:
+                # every node with f < this one's is expanded: the optimum is proven when the
+                # root's value is below it (see the module's docstring)
+                if live is not None and gr.solved[root] and live.root_value(root) < f:
                     status, optimal = "solved", True
                     break
-                level = g
+                level = f
             stats.frontier = len(heap)
             stop = budget.search_should_stop(stats.distinct, bool(gr.solved[root]))
             if stop is not None:
@@ -239,7 +267,7 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
                 status, reason = "state-limit", f"state limit reached ({stats.distinct} " \
                                                 "distinct states)"
                 break
-            _expand(gr, n, heap, stats, max_depth, max_states)
+            _expand(gr, n, heap, stats, max_depth, hfn, max_states)
             if gr.status[n] == OPEN:  # one more state than the limit: n left unexpanded
                 status, reason = "state-limit", f"state limit reached ({stats.distinct} " \
                                                 "distinct states)"
@@ -278,11 +306,12 @@ def _move_key(m: Move) -> tuple[object, ...]:
     return (KIND_ORDER[m.kind], m.label, m.child is None, m.child or ())
 
 
-def _expand(gr: Graph, n: int, heap: list[tuple[Cost, int]], stats: Stats,
-            max_depth: int, max_states: int | None = None) -> None:
-    """Expand node ``n``: a goal, a dead end, or its moves as edges (new children queued).
-    Before adding a distinct state past ``max_states`` it stops and leaves ``n`` unexpanded
-    (``OPEN``): the search then ends with at most that many, whatever order it expands in."""
+def _expand(gr: Graph, n: int, heap: list[Entry], stats: Stats, max_depth: int,
+            hfn: Heuristic | None = None, max_states: int | None = None) -> None:
+    """Expand node ``n``: a goal, a dead end, or its moves as edges (new children queued by
+    ``f``). Before adding a distinct state past ``max_states`` it stops and leaves ``n``
+    unexpanded (``OPEN``): the search then ends with at most that many, whatever order it
+    expands in."""
     sem = gr.sem
     es = gr.states[n]
     stats.expanded += 1
@@ -298,7 +327,8 @@ def _expand(gr: Graph, n: int, heap: list[tuple[Cost, int]], stats: Stats,
         return
     moves = sorted(sem.moves(es), key=_move_key)
     g0, d0 = gr.g[n], gr.depth[n] + 1
-    index, gs, status = gr.index, gr.g, gr.status
+    index, gs, status, states = gr.index, gr.g, gr.status, gr.states
+    heappush = heapq.heappush
     sym = gr.sym
     edges: list[Edge] = []
     for m in moves:
@@ -320,11 +350,11 @@ def _expand(gr: Graph, n: int, heap: list[tuple[Cost, int]], stats: Stats,
             stats.distinct += 1
             if len(child.worlds) > stats.max_worlds:
                 stats.max_worlds = len(child.worlds)
-            heapq.heappush(heap, (g1, c))
+            heappush(heap, (g1 if hfn is None else g1 + hfn(child), g1, c))
         else:
             if g1 < gs[c] and status[c] == OPEN:
                 gs[c], gr.depth[c] = g1, d0
-                heapq.heappush(heap, (g1, c))
+                heappush(heap, (g1 if hfn is None else g1 + hfn(states[c]), g1, c))
             gr.add_parent(c, n)
         edges.append(Edge(gr.descriptor(m, c), c, pid))
     gr.edges[n] = tuple(edges)
