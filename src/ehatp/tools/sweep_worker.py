@@ -11,9 +11,10 @@ with ``status = "error"``. Isolation (see :class:`Watchdog` and :func:`memory_li
   still running well after it (a domain that hangs while loading, native code), its watchdog
   leaves a note and ends the worker process; the executor's retry of the task then returns
   an error row at once;
-* memory: in a process of its own (the local pool) the address space is limited with
-  ``RLIMIT_AS`` and restored after; in a Dask or Ray worker, whose other threads must keep
-  working, ``solve``'s progress callback watches resident memory instead and stops it.
+* memory: ``solve``'s progress callback watches resident memory and stops the instance at
+  the budget; in a process of its own (the local pool) the address space is also limited with
+  ``RLIMIT_AS``, well above the budget, as a backstop, and restored after (a Dask or Ray
+  worker, whose other threads must keep working, has the watch only).
 """
 
 from __future__ import annotations
@@ -148,9 +149,9 @@ def _solve_into(row: dict[str, Any], task: Task, watchdog: Watchdog) -> None:
     row["problem"] = prob.name
     if task.kill_after is None and task.timeout is None:
         watchdog.arm(kill_after(prob.limits.timeout))
-    watch = None
-    if task.memory_gb is not None and task.memory_mode == "watch":
-        watch = MemoryWatch(task.memory_gb)
+    # the budget is watched in every mode: a kernel limit reached inside CPython's exception
+    # handling can leave the process spinning (CPython 3.11), so RLIMIT_AS is only a backstop
+    watch = MemoryWatch(task.memory_gb) if task.memory_gb is not None else None
     with watch or contextlib.nullcontext():
         result = solve(prob, timeout=task.timeout, progress=watch)
     stats = {k: _plain(v) for k, v in result.stats.items()
@@ -309,11 +310,18 @@ def address_space() -> int:
     return _statm(0)
 
 
+BACKSTOP = (4.0, 0.5)
+"""The address-space backstop of a ``--memory GB`` budget in a process of its own: ``4 * GB +
+0.5`` GiB. :class:`MemoryWatch` stops the instance at GB of resident memory first; the kernel
+limit only catches what grows outside ``solve`` or between two looks."""
+
+
 @contextmanager
 def memory_limit(gb: float | None) -> Iterator[None]:
-    """Let the address space grow by at most ``gb`` GiB per running instance (RLIMIT_AS over
-    what the process had when the first instance started), restored when the last one ends.
-    Instances running as threads of one process share one limit (their budgets add up)."""
+    """Let the address space grow by at most the backstop of ``gb`` GiB (:data:`BACKSTOP`) per
+    running instance (RLIMIT_AS over what the process had when the first instance started),
+    restored when the last one ends. Instances running as threads of one process share one
+    limit (their budgets add up)."""
     if gb is None:
         yield
         return
@@ -326,7 +334,8 @@ def memory_limit(gb: float | None) -> Iterator[None]:
             _base = address_space()
         _active += 1
         soft, hard = _saved or (resource.RLIM_INFINITY, resource.RLIM_INFINITY)
-        want = _base + int(_active * gb * GB)
+        factor, extra = BACKSTOP
+        want = _base + int(_active * (factor * gb + extra) * GB)
         for cap in (soft, hard):  # never above a limit the process already had
             if cap != resource.RLIM_INFINITY:
                 want = min(want, cap)
