@@ -15,7 +15,7 @@ from itertools import combinations
 from typing import NamedTuple
 
 from ..model.formula import And, Formula, conj, ground_atoms
-from ..model.grounding import FINISH, GOp, Grounded
+from ..model.grounding import FINISH, GOp, Grounded, no_check
 from ..model.htn import Agenda, Networks, Refiner
 from ..model.options import InformWhere, Passes, Relevance, Speech
 from ..model.problem import Cost
@@ -67,10 +67,6 @@ def bits_of(m: int) -> list[int]:
     return out
 
 
-def _nothing() -> None:
-    pass
-
-
 class Semantics:
     def __init__(self, g: Grounded) -> None:
         self.g = g
@@ -91,7 +87,7 @@ class Semantics:
         self._cop: dict[int, bool] = {}
         self._succ: dict[World, tuple[World, ...]] = {}
         self._inform: dict[tuple[int, Agenda, Agenda, Worlds], int] = {}
-        self.check: Callable[[], None] = _nothing
+        self.check: Callable[[], None] = no_check
 
     def bound(self, check: Callable[[], None]) -> None:
         """Have ``check`` called now and then while moves are computed (a time or memory

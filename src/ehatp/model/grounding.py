@@ -277,15 +277,15 @@ def ground_problem(problem: Problem, check: Callable[[], None] | None = None,
     return _Grounder(problem, check, ahead).run()
 
 
-def _no_check() -> None:
-    pass
+def no_check() -> None:
+    """The ``check`` of grounding and refinement when no limit is watched: does nothing."""
 
 
 class _Grounder:
     def __init__(self, problem: Problem, check: Callable[[], None] | None = None,
                  eager: int | None = None) -> None:
         self.p = problem
-        self.check = check or _no_check
+        self.check = check or no_check
         self.eager = problem.limits.ground_ahead if eager is None else eager
         self.d: Domain = problem.domain
         self.objects = problem.all_objects()
@@ -733,8 +733,9 @@ class _ModelGrounding:
         """Task ``t`` is reached: ground it later (ahead, or on demand)."""
         if t not in self.calls:
             self.calls[t] = call or _split(self.gr.task_names[t])
-        self.todo.append(t)
-        if self.pending is not None and t not in self.seen:
+        if self.pending is None:
+            self.todo.append(t)
+        elif t not in self.seen:
             self.pending.add(t)
 
     def run(self, limit: int | None) -> bool:
@@ -764,7 +765,6 @@ class _ModelGrounding:
         self.one(t)
         assert self.pending is not None
         self.pending.discard(t)
-        self.todo.clear()  # on demand, what ``one`` reached went to ``pending``
 
     def bindings(self, m: Method, tb: dict[Var, str]) -> Iterator[tuple[str, ...]]:
         """§1: the bindings of ``m``'s own parameters, in the order of the product of their

@@ -21,7 +21,7 @@ from math import factorial
 
 from .domain import DomainError
 from .formula import Formula, StateFn, negate
-from .grounding import FINISH, GModel, bits
+from .grounding import FINISH, GModel, bits, no_check
 
 MAX_DECOMPOSITION = 64
 """Default of ``[limits] max_decomposition``: nested method applications allowed before the
@@ -239,30 +239,21 @@ class Networks:
         succs = [frozenset(k for k in range(n) if j in preds[k]) for j in range(n)]
         label = [names[t] for t in tasks]
         below, above = _ranks(label, preds), _ranks(label, succs)
-        order: list[int] = []
-        for cls in classes:
-            cls = sorted(cls, key=lambda k: (below[k], above[k], k))
-            i = 0
-            while i < len(cls):
-                j = i + 1
-                while j < len(cls) and (below[cls[j]], above[cls[j]]) == \
-                        (below[cls[i]], above[cls[i]]):
-                    j += 1
-                order.extend(cls[i:j])  # ties: settled below
-                i = j
-        # ties (equal ranks) are rare; among their orders, the smallest code
-        ties = [[k for k in cls if (below[k], above[k]) == key]
-                for cls in classes
-                for key in sorted({(below[k], above[k]) for k in cls})]
-        ties = [t for t in ties if len(t) > 1]
-        if not ties:
+
+        def rank(k: int) -> tuple[tuple[int, int], tuple[int, int]]:
+            return below[k], above[k]
+
+        order = [k for cls in classes for k in sorted(cls, key=lambda k: (rank(k), k))]
+        # occurrences whose ranks tie (rare): among their orders, the smallest code
+        groups = [g for cls in classes for r in sorted({rank(k) for k in cls})
+                  if len(g := sorted(k for k in cls if rank(k) == r)) > 1]
+        if not groups:
             return order
         best: tuple[tuple[int, ...], ...] | None = None
         result = order
-        groups = [sorted(t) for t in ties]
+        members = {k for g in groups for k in g}
         for choice in product(*(_distinct_orders(g, tasks, preds, succs) for g in groups)):
             fill = iter([k for g in choice for k in g])
-            members = {k for g in groups for k in g}
             seq = [next(fill) if k in members else k for k in order]
             pos = {k: p for p, k in enumerate(seq)}
             code = tuple(tuple(sorted(pos[j] for j in preds[k])) for k in seq)
@@ -401,7 +392,7 @@ class Refiner:
         # the subtasks of each method as an agenda (partially ordered ones in canonical form)
         self._bodies: dict[int, tuple[tuple[StateFn, Formula, Agenda], ...]] = {}
         # called now and then while refining (a time or memory limit may raise from it)
-        self.check: Callable[[], None] = _nothing
+        self.check: Callable[[], None] = no_check
         self._steps = 0
 
     def _body(self, t: int) -> tuple[tuple[StateFn, Formula, Agenda], ...]:
@@ -474,9 +465,10 @@ class Refiner:
                 continue
             break
         n = len(agenda)
-        open_ = tuple(e for e in open_ if e[1] < n)  # those whose part is done are closed
-        if any(u == t for u, _ in open_):
-            return  # §1: refined again inside its own refinement: a loop, closed
+        if open_:
+            open_ = _still_open(open_, n)
+            if any(u == t for u, _ in open_):
+                return  # §1: refined again inside its own refinement: a loop, closed
         if depth > self.limit:
             raise self._endless(t, open_)
         self._steps += 1
@@ -572,9 +564,10 @@ class Refiner:
                 return
             conds = _add(conds, negate(d[0]), dw != 0)
             ws = ws2
-        open_ = tuple(e for e in open_ if e[1] < n)  # those whose part is done are closed
-        if any(u == t for u, _ in open_):
-            return  # §1: refined again inside its own refinement: a loop, closed
+        if open_:
+            open_ = _still_open(open_, n)
+            if any(u == t for u, _ in open_):
+                return  # §1: refined again inside its own refinement: a loop, closed
         if depth > self.limit:
             raise self._endless(t, open_)
         inner = (*open_, (t, n - 1))
@@ -628,14 +621,16 @@ length of the agenda that followed it when it was opened, so that it is still be
 while the agenda is longer; -1 marks one being refined around a block member."""
 
 
+def _still_open(open_: Open, n: int) -> Open:
+    """Those of ``open_`` still being refined at an agenda of length ``n`` (the others' part
+    is done: they are closed for good)."""
+    return tuple(e for e in open_ if e[1] < n)
+
+
 def _around(open_: Open, n: int) -> Open:
     """For a member of a block at the front of an agenda of length ``n``: the tasks of
     ``open_`` still being refined there, each around the whole of the member's refinement."""
     return tuple((u, -1) for u, k in open_ if k < n)
-
-
-def _nothing() -> None:
-    pass
 
 
 def _first(o: Option) -> int:
