@@ -202,20 +202,12 @@ def test_every_shipped_domain_maps_or_says_why() -> None:
             assert "\n" not in str(e) and str(e), name
 
 
-@pytest.mark.parametrize("name", QUICK)
-def test_small_shipped_domains_solve_and_validate(name: str) -> None:
+@pytest.mark.parametrize("name", [*QUICK, *(pytest.param(n, marks=pytest.mark.slow)
+                                             for n in SLOW)])
+def test_shipped_domains_solve_and_validate(name: str) -> None:
     shipped = {n: (d, p) for n, d, p in hddl.domains_shipped()}
     d, p = shipped[name]
-    row = hddl.check_domain(name, d, p, timeout=60)
-    assert row.stage == "validated", row
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("name", SLOW)
-def test_larger_shipped_domains_solve_and_validate(name: str) -> None:
-    shipped = {n: (d, p) for n, d, p in hddl.domains_shipped()}
-    d, p = shipped[name]
-    row = hddl.check_domain(name, d, p, timeout=120)
+    row = hddl.check_domain(name, d, p, timeout=120 if name in SLOW else 60)
     assert row.stage == "validated", row
 
 

@@ -202,6 +202,15 @@ def _random_members(r: random.Random) -> list[tuple[int, int]]:
     return out
 
 
+def _listed_otherwise(ms: list[tuple[int, int]], r: random.Random) -> list[tuple[int, int]]:
+    """The same network with its members listed in another (random) order."""
+    perm = list(range(len(ms)))
+    r.shuffle(perm)
+    at = {old: new for new, old in enumerate(perm)}
+    return [(ms[old][0], sum(1 << at[i] for i in range(len(ms)) if ms[old][1] >> i & 1))
+            for old in perm]
+
+
 def _as_validator(sem: V._Semantics, ag: tuple[object, ...]) -> V.Agenda:
     out: list[int | V.Block] = []
     for it in ag:
@@ -232,12 +241,7 @@ def test_planner_and_validator_build_and_print_networks_alike() -> None:
         ms = _random_members(r)
         mine = net.normal(ms)
         # the same network listed in another order is the same agenda (canonical)
-        perm = list(range(len(ms)))
-        r.shuffle(perm)
-        at = {old: new for new, old in enumerate(perm)}
-        shuffled = [(ms[old][0], sum(1 << at[i] for i in range(len(ms)) if ms[old][1] >> i & 1))
-                    for old in perm]
-        assert net.normal(shuffled) == mine
+        assert net.normal(_listed_otherwise(ms, r)) == mine
         pairs = {(i, j) for j, (_, m) in enumerate(ms) for i in range(len(ms)) if m >> i & 1}
         theirs = sem.canon([t for t, _ in ms], pairs)
         assert _as_validator(sem, mine) == theirs
@@ -288,12 +292,7 @@ def test_large_networks_are_ordered_by_rank_alike() -> None:
         ms = _big_members(r)
         mine = net.normal(ms)
         ranked += any(isinstance(it, Block) and len(it) > 6 for it in mine)
-        perm = list(range(len(ms)))
-        r.shuffle(perm)
-        at = {old: new for new, old in enumerate(perm)}
-        shuffled = [(ms[old][0], sum(1 << at[i] for i in range(len(ms)) if ms[old][1] >> i & 1))
-                    for old in perm]
-        assert net.normal(shuffled) == mine
+        assert net.normal(_listed_otherwise(ms, r)) == mine
         pairs = {(i, j) for j, (_, m) in enumerate(ms) for i in range(len(ms)) if m >> i & 1}
         theirs = sem.canon([t for t, _ in ms], pairs)
         assert _as_validator(sem, mine) == theirs
