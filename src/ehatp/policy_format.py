@@ -30,7 +30,7 @@ POLICY_FIX = "give a policy JSON written by `ehatp solve --out FILE`"
 FORMAT = "ehatp-policy"
 VERSION = 2  # the version written; READS lists every version read
 READS = (1, 2)
-COMM_KINDS = ("inform", "ask")
+COMM_KINDS = ("inform", "ask", "announce")
 
 
 @dataclass
@@ -38,7 +38,7 @@ class PolicyMove:
     """One move of the policy: an edge from the node where it is played to node ``to``."""
 
     agent: str  # who moves (the domain's name for the robot or the human)
-    kind: str  # action | wait | pass | inform | ask | silence
+    kind: str  # action | wait | pass | inform | ask | silence | answer | announce
     action: str  # the move as printed: place(w, box2), inform(empty(box2)), wait
     name: str  # the action's name (inform, ask, wait, pass, silence for the others)
     args: list[str]  # its arguments (inform: the literals told; ask: the question)
@@ -76,6 +76,14 @@ class PolicyNode:
     value: Cost  # cost from here to the end, under the policy's objective
     goal: bool
     moves: list[PolicyMove] = field(default_factory=list)
+    # the human agendas the robot cannot tell apart here (docs/semantics.md §3), when more
+    # than one; ``human_agenda`` is then the first of them
+    hypotheses: list[list[str]] = field(default_factory=list)
+
+    @property
+    def human_agendas(self) -> list[list[str]]:
+        """Every human agenda consistent with what the robot observed (at least one)."""
+        return self.hypotheses if len(self.hypotheses) > 1 else [self.human_agenda]
 
     @property
     def children(self) -> list[int]:
@@ -88,7 +96,8 @@ class PolicyNode:
                 "state": self.state, "robot_agenda": self.robot_agenda,
                 "human_agenda": self.human_agenda, "to_move": self.to_move,
                 "value": num(self.value), "goal": self.goal,
-                "moves": [m.to_dict() for m in self.moves]}
+                "moves": [m.to_dict() for m in self.moves],
+                **({"hypotheses": self.hypotheses} if len(self.hypotheses) > 1 else {})}
 
 
 @dataclass(frozen=True)
@@ -455,14 +464,18 @@ _NODE_KEYS = ("id", "copresent", "k", "worlds", "divergence", "world_diffs", "st
 
 
 def _node(n: dict[str, Any]) -> PolicyNode:
-    extra = set(n) - {*_NODE_KEYS, "moves"}
+    extra = set(n) - {*_NODE_KEYS, "moves", "hypotheses"}
     if extra:
         raise TypeError(f"unexpected field(s) {', '.join(sorted(extra))} in a node")
     moves = n["moves"]
     if not isinstance(moves, list):
         raise TypeError("moves must be a list")
+    hyps = n.get("hypotheses", [])
+    if not isinstance(hyps, list) or not all(
+            isinstance(h, list) and all(isinstance(x, str) for x in h) for h in hyps):
+        raise TypeError("hypotheses must be a list of lists of strings")
     return PolicyNode(**{k: n[k] for k in _NODE_KEYS},
-                      moves=[PolicyMove(**m) for m in moves])
+                      moves=[PolicyMove(**m) for m in moves], hypotheses=hyps)
 
 
 def _nodes_v1(raw: list[Any]) -> list[PolicyNode]:

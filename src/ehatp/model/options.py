@@ -21,6 +21,14 @@ class Passes(StrEnum):
 
     FAIR = "fair"  # only after a wait the robot could not avoid (nothing real to do)
     PROTOTYPE = "prototype"  # after any robot wait (the authors' prototype)
+    IDLE = "idle"  # only when it has nothing it could do (the HATP/EHDA predecessor's human)
+
+
+class Intentions(StrEnum):
+    """Whether the robot sees which method the human chose (§3-§4)."""
+
+    HIDDEN = "hidden"  # it sees actions only: one AND branch per distinct action label
+    VISIBLE = "visible"  # every method choice is announced: one branch per refinement
 
 
 class InformWhere(StrEnum):
@@ -54,9 +62,9 @@ class ObjectiveKind(StrEnum):
 # the keys of each options table, for the loader's checks
 OPTION_KEYS: dict[str, frozenset[str]] = {
     "options": frozenset({"human_passes_when_blocked", "inform_max_atoms"}),
-    "human": frozenset({"passes", "passes_when_blocked", "anticipates"}),
+    "human": frozenset({"passes", "passes_when_blocked", "anticipates", "intentions"}),
     "communication": frozenset({"inform", "speech", "relevance", "ask", "inform_max_atoms",
-                                "plan_horizon"}),
+                                "plan_horizon", "robot_asks", "announce"}),
     "objective": frozenset({"kind", "weights", "ties"}),
 }
 TIE_KEYS = ("communications", "waits", "length", "worst-case", "expected")
@@ -72,6 +80,8 @@ class HumanModel:
     passes_when_blocked: bool = True
     # the human imagines what the robot does unseen (the product of anticipated events)
     anticipates: bool = True
+    # whether the robot sees the human's method choices (§3): hidden by default
+    intentions: Intentions = Intentions.HIDDEN
 
 
 @dataclass(frozen=True)
@@ -84,6 +94,8 @@ class Communication:
     ask: bool = True
     inform_max_atoms: int = 3  # largest informing set tried (subsets by increasing size)
     plan_horizon: int = 8  # human steps looked ahead by relevance = "plan"
+    robot_asks: bool = False  # the robot may ask the human what it is about to do (§5)
+    announce: bool = False  # the robot may announce its own agenda (§5)
 
 
 @dataclass(frozen=True)
@@ -158,7 +170,8 @@ def read_options(r: _Reader, data: Mapping[str, Any]
         _choice(r, "human", h, "passes", Passes, Passes.FAIR),
         _flag(r, "[human] passes_when_blocked", "passes_when_blocked",
               h.get("passes_when_blocked", True)),
-        _flag(r, "[human] anticipates", "anticipates", h.get("anticipates", True)))
+        _flag(r, "[human] anticipates", "anticipates", h.get("anticipates", True)),
+        _choice(r, "human", h, "intentions", Intentions, Intentions.HIDDEN))
     comm = Communication(
         _choice(r, "communication", c, "inform", InformWhere, InformWhere.COPRESENT),
         _choice(r, "communication", c, "speech", Speech, Speech.TURN),
@@ -166,7 +179,9 @@ def read_options(r: _Reader, data: Mapping[str, Any]
         _flag(r, "[communication] ask", "ask", c.get("ask", True)),
         _count(r, "[communication] inform_max_atoms", "inform_max_atoms",
                c.get("inform_max_atoms", 3)),
-        _count(r, "[communication] plan_horizon", "plan_horizon", c.get("plan_horizon", 8)))
+        _count(r, "[communication] plan_horizon", "plan_horizon", c.get("plan_horizon", 8)),
+        _flag(r, "[communication] robot_asks", "robot_asks", c.get("robot_asks", False)),
+        _flag(r, "[communication] announce", "announce", c.get("announce", False)))
     weights_t = o.get("weights", {})
     if not isinstance(weights_t, dict):
         raise r.err("[objective] weights", "weights must be a table",
@@ -188,5 +203,5 @@ def read_options(r: _Reader, data: Mapping[str, Any]
     return human, comm, objective, tuple(notes)
 
 
-__all__ = ["DEFAULT_TIES", "OPTION_KEYS", "TIE_KEYS", "Communication", "HumanModel", "InformWhere",
+__all__ = ["DEFAULT_TIES", "OPTION_KEYS", "TIE_KEYS", "Communication", "HumanModel", "InformWhere", "Intentions",
            "Objective", "ObjectiveKind", "Passes", "Relevance", "Speech", "read_options"]
