@@ -24,9 +24,12 @@ def test_time_limit_stops_cleanly() -> None:
     assert r.stats["distinct"] >= 1 and "expanded" in r.stats
 
 
-def test_depth_limit_makes_deep_problems_unsolvable_and_says_so() -> None:
+def test_a_problem_stopped_by_the_depth_limit_reports_the_limit_not_no_policy() -> None:
+    # §6 (revised): P2's policies need 13 moves; cut at 4 nothing is proven unsolvable
     r = ehatp.solve(ehatp.load(CUBES / "p2.toml"), max_depth=4)
-    assert r.status == "unsolvable" and "depth limit 4" in r.reason
+    assert r.status == "depth-limit" and r.policy is None
+    assert "depth limit" in r.reason and "no policy exists" not in r.reason
+    assert ehatp.solve(ehatp.load(CUBES / "p2.toml"), max_depth=13).status == "solved"
 
 
 def test_timelines_put_parallel_lanes_between_separation_and_reunion() -> None:

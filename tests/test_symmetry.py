@@ -168,7 +168,7 @@ def test_an_order_dependent_decision_falls_back_to_the_full_search(
         monkeypatch: pytest.MonkeyPatch) -> None:
     from ehatp.search import symmetry
 
-    def always(self: symmetry.SymSemantics, es: EState, chosen: int) -> bool:
+    def always(self: symmetry.SymSemantics, es: EState, chosen: int, plan: bool) -> bool:
         return True
 
     p = load(ROOT / "examples/cubes/p4.toml")  # it informs: an informing set is computed

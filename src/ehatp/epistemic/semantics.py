@@ -9,7 +9,7 @@ world), ``ask`` and ``pass``. Situation assessment runs on every new state.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from itertools import combinations
 from typing import NamedTuple
@@ -17,13 +17,16 @@ from typing import NamedTuple
 from ..model.formula import And, Formula, conj, ground_atoms
 from ..model.grounding import FINISH, GOp, Grounded, no_check
 from ..model.htn import Agenda, Networks, Refiner
-from ..model.options import InformWhere, Passes, Relevance, Speech
+from ..model.options import InformWhere, Intentions, Passes, Relevance, Speech
 from ..model.problem import Cost
 from .state import HUMAN, ROBOT, EState, World, Worlds, normalize, states_of
 
 ACTION, WAIT, PASS, INFORM, ASK, SILENCE = "action", "wait", "pass", "inform", "ask", "silence"
+ANSWER, ANNOUNCE = "answer", "announce"  # the human's answer to the robot; the robot's intention
 PASSIVE = (WAIT, PASS)
 BLOCKED, HORIZON = -2, -3  # ends of a human plan other than FINISH (relevance "plan")
+NOT_DONE = -4  # what a world whose robot agenda is blocked lets the human expect (§5)
+ASK_INTENTION = "ask(intention)"
 DEAD_PASSIVE_RUN = 3
 
 
@@ -86,7 +89,7 @@ class Semantics:
         self._vis: dict[int, int] = {}
         self._cop: dict[int, bool] = {}
         self._succ: dict[World, tuple[World, ...]] = {}
-        self._inform: dict[tuple[int, Agenda, Agenda, Worlds], int] = {}
+        self._inform: dict[tuple[int, Agenda, tuple[Agenda, ...], Worlds], tuple[int, ...]] = {}
         self.check: Callable[[], None] = no_check
 
     def bound(self, check: Callable[[], None]) -> None:
@@ -146,10 +149,10 @@ class Semantics:
         turn = HUMAN if g.problem.starts == "human" else ROBOT
         worlds = self.assess(g.init, normalize((s, self.attributed(ag)) for s, ag in g.beliefs))
         worlds = self.sees_done(g.init, g.robot_agenda, worlds)
-        es = EState(turn, g.init, g.robot_agenda, g.human_agenda, worlds, 0, 0)
+        es = EState(turn, g.init, g.robot_agenda, (g.human_agenda,), worlds, 0, 0)
         if (turn == HUMAN and self.comm.speech == Speech.WITH_ACTION
                 and (self.copresent(g.init) or self.comm.inform == InformWhere.ANYWHERE)
-                and self.informing_set(es)):
+                and self.informing_sets(es)):
             # §5: the robot may speak before the human's very first move
             es = es._replace(turn=ROBOT, opening=True)
         return es
@@ -260,11 +263,12 @@ class Semantics:
         return self.R.refine(es.robot_agenda, es.true)[:1] == ((FINISH, ()),)
 
     def human_done(self, es: EState) -> bool:
-        """§6: the human's agenda certainly finishes over W (done in every world)."""
+        """§6 (with §3's hypotheses): every human agenda of ``A_H`` certainly finishes over W
+        (done in every world): the robot cannot otherwise know the task done."""
         states = states_of(es.worlds)
         full = (1 << len(states)) - 1
-        return any(u.op == FINISH and u.worlds == full
-                   for u in self.H.refine_in_all(es.human_agenda, states))
+        return all(any(u.op == FINISH and u.worlds == full
+                       for u in self.H.refine_in_all(h, states)) for h in es.human_agendas)
 
     def human_believes_robot_done(self, es: EState) -> bool:
         """§6: in every world the robot agenda the human attributes can finish (M_R^H)."""
@@ -278,7 +282,13 @@ class Semantics:
     # -- moves ----------------------------------------------------------------------------
     def moves(self, es: EState) -> list[Move]:
         """§4: the options of the agent to move (robot: OR choices; human: AND branches)."""
-        return self.robot_moves(es) if es.turn == ROBOT else self.human_moves(es)
+        if es.turn == ROBOT:
+            return self.robot_moves(es)
+        return self.answers(es) if es.answering else self.human_moves(es)
+
+    def together(self, t: int) -> bool:
+        """§5: whether the robot can talk to the human in ``t`` (co-present, or anywhere)."""
+        return self.copresent(t) or self.comm.inform == InformWhere.ANYWHERE
 
     def robot_moves(self, es: EState) -> list[Move]:
         """§4-§5: the robot's options: the first actions of its agenda (while co-present or
@@ -287,10 +297,9 @@ class Semantics:
         at a speech opening only ``inform`` and ``silence``."""
         t, cop = es.true, self.copresent(es.true)
         if es.opening:
-            mask = self.informing_set(es)
             after = es._replace(turn=HUMAN, opening=False)
             opening = [Move(ROBOT, SILENCE, SILENCE, 0, after)]
-            if mask:
+            for mask in self.informing_sets(es):
                 opening.append(Move(ROBOT, INFORM, self.inform_label(t, mask), self.costs.inform,
                                     self.inform(after._replace(turn=ROBOT), mask), atoms=mask))
             return opening
@@ -304,25 +313,60 @@ class Semantics:
             out.append(Move(ROBOT, ACTION, gop.name, gop.cost,
                             self.robot_exec(es, gop, rest, cop), gop.id))
         forced = not acts or self.human_model.passes == Passes.PROTOTYPE
-        out.append(Move(ROBOT, WAIT, "wait", self.costs.wait, self.robot_wait(es, cop, forced)))
-        if cop or self.comm.inform == InformWhere.ANYWHERE:
-            mask = self.informing_set(es)
-            if mask:
-                label = self.inform_label(t, mask)
-                out.append(Move(ROBOT, INFORM, label, self.costs.inform, self.inform(es, mask),
-                                atoms=mask))
-                if self.comm.speech == Speech.WITH_ACTION:
-                    # said first, then done: the action runs from the informed worlds
-                    told = es._replace(worlds=self.observe(t, es.worlds, mask))
-                    for gop, rest in acts:
-                        out.append(Move(ROBOT, ACTION, f"{label} + {gop.name}",
-                                        self.costs.inform + gop.cost,
-                                        self.robot_exec(told, gop, rest, cop), gop.id,
-                                        atoms=mask))
-                    out.append(Move(ROBOT, WAIT, f"{label} + wait",
-                                    self.costs.inform + self.costs.wait,
-                                    self.robot_wait(told, cop, forced), atoms=mask))
+        waited = self.robot_wait(es, cop, forced)
+        out.append(Move(ROBOT, WAIT, "wait", self.costs.wait, waited))
+        if not self.together(t):
+            return out
+        for mask in self.informing_sets(es):
+            out.append(Move(ROBOT, INFORM, self.inform_label(t, mask), self.costs.inform,
+                            self.inform(es, mask), atoms=mask))
+        if self.comm.speech == Speech.WITH_ACTION:
+            # §5: what is said with a move is judged on the state the move leads to (the
+            # human's next decision), and told as the truth is then
+            for m in out[:len(acts) + 1]:
+                assert m.child is not None
+                for mask in self.informing_sets(m.child):
+                    out.append(Move(ROBOT, m.kind, f"{self.inform_label(m.child.true, mask)} + "
+                                    f"{m.label}", self.costs.inform + m.cost,
+                                    self.inform(m.child._replace(turn=ROBOT), mask)._replace(
+                                        passive=m.child.passive, forced=m.child.forced),
+                                    m.op, atoms=mask))
+        if self.comm.announce:
+            said = self.announce(es)
+            if said is not None:
+                out.append(Move(ROBOT, ANNOUNCE, self.announce_label(es.robot_agenda),
+                                self.costs.inform, said))
+        if self.comm.robot_asks and len(es.human_agendas) > 1:
+            out.append(Move(ROBOT, ASK, ASK_INTENTION, self.costs.ask,
+                            es._replace(turn=HUMAN, answering=True, passive=0, forced=False)))
         return out
+
+    def announce_label(self, agenda: Agenda) -> str:
+        """§5: ``announce(t1, t2)``: the robot's agenda as the domain names its tasks."""
+        return f"announce({', '.join(self.net.names_of(agenda))})"
+
+    def announce(self, es: EState) -> EState | None:
+        """§5 (``announce``): the robot tells the human the agenda it follows: the worlds
+        whose attributed agenda is that one stay (an ``inform`` of the agenda); if none, every
+        world takes it. None when it is not relevant: the human's expectations of the robot
+        (read per world) already equal the truth's, or telling changes no world."""
+        if self.robot_view(es.worlds) == self.robot_truth(es):
+            return None
+        told = self.attributed(es.robot_agenda)
+        keep = tuple(w for w in es.worlds if w[1] == told)
+        worlds = keep if keep else normalize((s, told) for s, _ in es.worlds)
+        if worlds == es.worlds:
+            return None
+        return es._replace(turn=HUMAN, worlds=worlds, passive=0, forced=False)
+
+    def answers(self, es: EState) -> list[Move]:
+        """§5 (``robot_asks``): the human's truthful answers to the robot's question about
+        its intention, one per hypothesis of ``A_H``: ``answer(t1, t2)`` names its agenda, the
+        robot keeps that hypothesis, and it is the human's turn (the answer costs nothing: the
+        robot's question took the robot's turn)."""
+        return [Move(HUMAN, ANSWER, f"answer({', '.join(self.net.names_of(h))})", 0,
+                     es._replace(answering=False, human_agendas=(h,)))
+                for h in es.human_agendas]
 
     def robot_exec(self, es: EState, op: GOp, rest: Agenda, cop: bool) -> EState:
         """§4: the robot does ``op``: witnessed (worlds that expected it advance, else revision) or
@@ -344,7 +388,7 @@ class Semantics:
         else:
             worlds, k = self.product(es.worlds), es.k + 1
         worlds = self.sees_done(t2, rest, self.assess(t2, worlds))
-        return EState(HUMAN, t2, rest, es.human_agenda, worlds,
+        return EState(HUMAN, t2, rest, es.human_agendas, worlds,
                       0 if self.copresent(t2) else k, 0)
 
     def robot_wait(self, es: EState, cop: bool, forced: bool) -> EState:
@@ -356,16 +400,18 @@ class Semantics:
         return es._replace(turn=HUMAN, worlds=worlds, k=k, passive=es.passive + 1,
                            forced=forced)
 
-    def human_moves(self, es: EState) -> list[Move]:
-        """§4: the human's options on W: certain actions, ``ask`` of uncertain ones (§5), and
-        ``pass`` under the fair or prototype rule."""
+    def human_options(self, es: EState, h: Agenda) -> tuple[
+            list[tuple[int, Agenda]], dict[str, Formula], bool, bool]:
+        """§4 for one human agenda ``h`` on W: its certain actions (op, rest), its questions
+        (label -> the uncertain part asked, §5), whether it may ``pass`` under the pass rule,
+        and whether such a pass is a wait (unfinished, no action it is sure of)."""
         cop = self.copresent(es.true)
         states = states_of(es.worlds)
         full = (1 << len(states)) - 1
         acts: list[tuple[int, Agenda]] = []
         asks: dict[str, Formula] = {}
         finished = False
-        for u in self.H.refine_in_all(es.human_agenda, states):
+        for u in self.H.refine_in_all(h, states):
             if u.worlds == full:
                 if u.op != FINISH:
                     acts.append((u.op, u.rest))
@@ -374,26 +420,60 @@ class Semantics:
             elif cop and u.conds and self.comm.ask:
                 phi = self.uncertain_part(conj(*u.conds), states)
                 asks.setdefault(self.show(phi), phi)
-        out: list[Move] = []
-        for op, rest in acts:
-            gop = self.g.human.ops[op]
-            out.append(self.human_exec(es, gop, rest))
-        for label, phi in sorted(asks.items()):
-            out.append(Move(HUMAN, ASK, f"ask({label})", self.costs.ask, self.ask(es, phi)))
-        if cop:  # §4: no idling while a robot that has nothing to do waits for the human
+        if self.human_model.passes == Passes.IDLE:  # the predecessor's human: only when idle
+            may_pass = not acts and not asks
+        elif cop:  # §4: no idling while a robot that has nothing to do waits for the human
             may_pass = not (es.forced and (acts or (
                 asks and not self.human_model.passes_when_blocked)))
         else:
             may_pass = not acts
-        if may_pass:
+        return acts, asks, may_pass, not acts and not finished
+
+    def human_moves(self, es: EState) -> list[Move]:
+        """§4: the human's options on W: certain actions, ``ask`` of uncertain ones (§5), and
+        ``pass`` under the pass rule, over the hypotheses of ``A_H`` (§3-§4): with hidden
+        intentions one AND branch per distinct label, its child keeping every hypothesis
+        (progressed by every refinement) for which the label was an option; with visible
+        intentions one branch per refinement, labels that would repeat at the node followed
+        by the agenda the human announces (``grab(c) [place_l(c)]``)."""
+        acts: dict[int, list[Agenda]] = {}
+        asks: dict[str, tuple[Formula, list[Agenda]]] = {}
+        passers: list[Agenda] = []
+        waits = False
+        for h in es.human_agendas:
+            h_acts, h_asks, may_pass, h_waits = self.human_options(es, h)
+            for op, rest in h_acts:
+                acts.setdefault(op, []).append(rest)
+            for label, phi in h_asks.items():
+                asks.setdefault(label, (phi, []))[1].append(h)
+            if may_pass:
+                passers.append(h)
+                waits = waits or h_waits
+        out: list[Move] = []
+        if self.human_model.intentions == Intentions.VISIBLE:
+            for op, rests in acts.items():
+                gop = self.g.human.ops[op]
+                for rest in dict.fromkeys(rests):
+                    m = self.human_exec(es, gop, (rest,))
+                    if len(rests) > 1:
+                        m = _relabel(m, f"{m.label} [{', '.join(self.net.names_of(rest))}]")
+                    out.append(m)
+        else:
+            for op, rests in acts.items():
+                out.append(self.human_exec(es, self.g.human.ops[op], _hypotheses(rests)))
+        for label, (phi, hs) in sorted(asks.items()):
+            out.append(Move(HUMAN, ASK, f"ask({label})", self.costs.ask,
+                            self.ask(es, phi)._replace(human_agendas=_hypotheses(hs))))
+        if passers:
             out.append(Move(HUMAN, PASS, "pass", self.costs.pass_,
-                            es._replace(turn=ROBOT, passive=es.passive + 1, forced=False),
-                            waits=not acts and not finished))
+                            es._replace(turn=ROBOT, passive=es.passive + 1, forced=False,
+                                        human_agendas=_hypotheses(passers)), waits=waits))
         return out
 
-    def human_exec(self, es: EState, op: GOp, rest: Agenda) -> Move:
+    def human_exec(self, es: EState, op: GOp, rests: tuple[Agenda, ...]) -> Move:
         """§4: the human does ``op``: a failure when it does not hold in T (a false belief); else T
-        and every world advance, inferable atoms are learned, then situation assessment."""
+        and every world advance, inferable atoms are learned, then situation assessment.
+        ``rests`` are the hypotheses after it (§3)."""
         t = es.true
         if not op.pre(t):
             false = [self.g.unit_name(u)
@@ -410,7 +490,7 @@ class Semantics:
         worlds = self.sees_done(t2, es.robot_agenda, self.assess(t2, normalize(new)))
         k = 0 if self.copresent(t2) else es.k
         return Move(HUMAN, ACTION, op.name, op.cost,
-                    EState(ROBOT, t2, es.robot_agenda, rest, worlds, k, 0), op.id)
+                    EState(ROBOT, t2, es.robot_agenda, rests, worlds, k, 0), op.id)
 
     def _unmet(self, op: GOp, t: int, believed: int) -> int:
         """Atoms of the precondition on which the human's belief differs from the truth."""
@@ -467,8 +547,23 @@ class Semantics:
         return frozenset((u.op, u.worlds == full) for u in self.H.refine_in_all(agenda, states))
 
     def robot_view(self, worlds: Worlds) -> frozenset[int]:
-        """§5: the robot options the human anticipates over ``worlds`` (M_R^H), FINISH included."""
-        return frozenset(op for s, ag in worlds for op, _ in self.RH.refine(ag, s))
+        """§5, read per world: the robot options the human anticipates over ``worlds``
+        (M_R^H), FINISH included; a world whose attributed agenda is unfinished but offers
+        nothing now adds :data:`NOT_DONE` (the human there does not think the robot done)."""
+        out: set[int] = set()
+        for s, ag in worlds:
+            opts = self.RH.refine(ag, s)
+            if opts:
+                out.update(op for op, _ in opts)
+            else:
+                out.add(NOT_DONE)
+        return frozenset(out)
+
+    def robot_truth(self, es: EState) -> frozenset[int]:
+        """§5: the robot's real next options under T (M_R), FINISH included, or
+        :data:`NOT_DONE` when its agenda is blocked: what :meth:`robot_view` is compared with."""
+        opts = self.R.refine(es.robot_agenda, es.true)
+        return frozenset(op for op, _ in opts) if opts else frozenset((NOT_DONE,))
 
     def plans(self, agenda: Agenda, s: int) -> frozenset[tuple[int, ...]]:
         """§5 (relevance "plan"): the sequences of human actions that refine ``agenda`` with
@@ -495,23 +590,40 @@ class Semantics:
             r = self._plans[key] = frozenset(out)
         return r
 
-    def _plans_differ(self, agenda: Agenda, t: int, worlds: Worlds) -> bool:
-        want = self.plans(agenda, t)
-        return any(self.plans(agenda, s) != want for s in states_of(worlds))
+    def _plans_differ(self, agendas: tuple[Agenda, ...], t: int, worlds: Worlds) -> bool:
+        states = states_of(worlds)
+        for agenda in agendas:
+            want = self.plans(agenda, t)
+            if any(self.plans(agenda, s) != want for s in states):
+                return True
+        return False
 
-    def informing_set(self, es: EState) -> int:
-        """§5: a smallest set of units -- atoms, state variables and counters, each told whole
-        -- (as a mask) whose correction makes the human's next
-        options, its expectations of the robot (FINISH included) and, under relevance "plan",
-        its plans, computed on W, equal those computed on the truth; 0 when the divergence is
-        irrelevant or cannot be fixed by telling atoms."""
-        key = (es.true, es.robot_agenda, es.human_agenda, es.worlds)
+    def informing_sets(self, es: EState) -> tuple[int, ...]:
+        """§5: the sets of units the robot may tell (as masks; empty when the divergence is
+        irrelevant or cannot be fixed by telling atoms): under relevance "next" the set of
+        :meth:`informing_set`; under "plan" its plan-fixing set and, when that is another or
+        none, the set that fixes the next step as "next" finds it (so "plan" offers every
+        option "next" does, and never solves fewer problems)."""
+        key = (es.true, es.robot_agenda, es.human_agendas, es.worlds)
         r = self._inform.get(key)
         if r is None:
-            r = self._inform[key] = self._informing_set(es)
+            nxt = self.informing_set(es, False)
+            if self.comm.relevance == Relevance.PLAN:
+                plan = self.informing_set(es, True)
+                r = tuple(m for m in dict.fromkeys((plan, nxt)) if m)
+            else:
+                r = (nxt,) if nxt else ()
+            self._inform[key] = r
         return r
 
-    def _informing_set(self, es: EState) -> int:
+    def informing_set(self, es: EState, plan: bool) -> int:
+        """§5: a smallest set of units -- atoms, state variables and counters, each told whole
+        -- (as a mask) whose correction makes the human's next options (for every hypothesis
+        of ``A_H``), its expectations of the robot (read per world, FINISH included) and, with
+        ``plan`` (relevance "plan"), its plans, computed on W, equal those computed on the
+        truth; failing that, the human's own (next options and plans) alone; 0 when the
+        divergence is irrelevant or cannot be fixed by telling atoms. Among sets of one size:
+        fewer remaining worlds, then telling what is true, then by name."""
         t = es.true
         states = states_of(es.worlds)
         div = 0
@@ -519,22 +631,17 @@ class Semantics:
             div |= s ^ t
         if not div:
             return 0
-        hv_t = self.human_view(es.human_agenda, (t,))
-        rv_t = frozenset(op for op, _ in self.R.refine(es.robot_agenda, t))
-        h_diff = self.human_view(es.human_agenda, states) != hv_t
-        r_diff = self.robot_view(es.worlds) != rv_t
-        plan = self.comm.relevance == Relevance.PLAN
-        p_diff = plan and self._plans_differ(es.human_agenda, t, es.worlds)
+        h_diff = not self.human_views_fixed(es, es.worlds)
+        r_diff = self.robot_view(es.worlds) != self.robot_truth(es)
+        p_diff = plan and self._plans_differ(es.human_agendas, t, es.worlds)
         if not (h_diff or r_diff or p_diff):
             return 0
         g = self.g
         cands = g.units(div)  # an atom, or a variable or counter told whole
         # make every view equal (fixing one must not break another); failing that, the
         # human's own (next options and plans) alone
-        targets = [(True, True, plan)]
-        if h_diff or p_diff:
-            targets.append((True, False, plan))
-        for want_h, want_r, want_p in targets:
+        targets = [True] + ([False] if h_diff or p_diff else [])
+        for want_r in targets:
             for size in range(1, min(len(cands), self.comm.inform_max_atoms) + 1):
                 best: tuple[int, int, list[str], int] | None = None
                 for combo in combinations(cands, size):
@@ -542,11 +649,7 @@ class Semantics:
                     for u in combo:
                         m |= u
                     w2 = self.observe(t, es.worlds, m)
-                    if want_h and self.human_view(es.human_agenda, states_of(w2)) != hv_t:
-                        continue
-                    if want_r and self.robot_view(w2) != rv_t:
-                        continue
-                    if want_p and self._plans_differ(es.human_agenda, t, w2):
+                    if not self.fixes(es, w2, want_r, plan):
                         continue
                     # prefer fewer remaining worlds, then telling what is true (a value counts
                     # as true), then by name
@@ -557,3 +660,29 @@ class Semantics:
                 if best is not None:
                     return best[3]
         return 0
+
+    def human_views_fixed(self, es: EState, worlds: Worlds) -> bool:
+        """§5: for every hypothesis of ``A_H``, the human's next options on ``worlds`` are
+        those on the truth."""
+        states = states_of(worlds)
+        return all(self.human_view(h, states) == self.human_view(h, (es.true,))
+                   for h in es.human_agendas)
+
+    def fixes(self, es: EState, worlds: Worlds, want_r: bool, plan: bool) -> bool:
+        """§5: whether the informed ``worlds`` make the human's views equal the truth's: its
+        next options (every hypothesis), with ``want_r`` its expectations of the robot, with
+        ``plan`` its plans."""
+        if not self.human_views_fixed(es, worlds):
+            return False
+        if want_r and self.robot_view(worlds) != self.robot_truth(es):
+            return False
+        return not (plan and self._plans_differ(es.human_agendas, es.true, worlds))
+
+
+def _hypotheses(agendas: Iterable[Agenda]) -> tuple[Agenda, ...]:
+    """§3: a set of human agendas in canonical form (distinct, sorted)."""
+    return tuple(sorted(set(agendas)))
+
+
+def _relabel(m: Move, label: str) -> Move:
+    return Move(m.agent, m.kind, label, m.cost, m.child, m.op, m.atoms, m.failure, m.waits)

@@ -1,10 +1,12 @@
 """Epistemic states ``s = <d, W>`` as immutable, hashable tuples.
 
-``d`` is the designated world (true state and both agendas); ``W`` the worlds the human
-entertains, each a state plus the robot agenda the human attributes to the robot there. A node
-of the search also carries whose turn it is, the K-counter and the count of consecutive passive
-moves: exactly what the transition rules read, so equal tuples are interchangeable (sound
-duplicate detection).
+``d`` is the designated world (true state and the robot's agenda) with the set ``A_H`` of human
+agendas that fit what the robot observed (docs/semantics.md §3, "What the robot observes": it
+sees the human's actions, never its method choices); ``W`` the worlds the human entertains,
+each a state plus the robot agenda the human attributes to the robot there. A node of the
+search also carries whose turn it is, the K-counter and the count of consecutive passive moves:
+exactly what the transition rules read, so equal tuples are interchangeable (sound duplicate
+detection).
 """
 
 from __future__ import annotations
@@ -24,12 +26,13 @@ class EState(NamedTuple):
     turn: int
     true: int
     robot_agenda: Agenda
-    human_agenda: Agenda
+    human_agendas: tuple[Agenda, ...]  # A_H: sorted, distinct, never empty (§3)
     worlds: Worlds
     k: int
     passive: int
     forced: bool = False  # human node: the robot's last move was a forced wait (§4)
     opening: bool = False  # robot node: the speech opening before the human's first move (§5)
+    answering: bool = False  # human node: the human answers the robot's question (§5)
 
 
 def normalize(worlds: Iterable[World]) -> Worlds:

@@ -56,7 +56,8 @@ from .symmetry import Symmetry, SymSemantics, detect
 from .values import LiveWorst, Values, compute_values
 
 OPEN, EXPANDED, GOAL, DEAD = 0, 1, 2, 3
-KIND_ORDER = {"silence": -1, "action": 0, "inform": 1, "ask": 2, "wait": 3, "pass": 4}
+KIND_ORDER = {"silence": -1, "action": 0, "inform": 1, "announce": 2, "ask": 3, "answer": 4,
+              "wait": 5, "pass": 6}
 Entry = tuple[Bound, Cost, int]  # the queue's: (f, g, node id)
 
 
@@ -107,7 +108,9 @@ class Graph:
         # list beyond (most nodes have one parent)
         self._parents: list[int | list[int]] = []
         self.g: list[Cost] = []
+        # §6: each node's least number of moves from the root over the paths found so far
         self.depth: list[int] = []
+        self.depth_cut: set[int] = set()  # dead ends made by the depth limit alone
         self.solved = bytearray()
         self.pending: list[int] = []  # human nodes: unsolved edges left
         self._worlds: dict[Worlds, Worlds] = {}
@@ -154,7 +157,7 @@ class Graph:
 
     def descriptor(self, m: Move, child: int) -> Move:
         """``m`` without its child state, shared between equal moves (see :class:`Edge`)."""
-        if m.kind == INFORM and child >= 0:  # describe() reads the child's true state
+        if (m.kind == INFORM or m.atoms) and child >= 0:  # what is told reads the child's T
             return Move(m.agent, m.kind, m.label, m.cost, self.states[child], m.op, m.atoms,
                         m.failure, m.waits)
         key = (m.agent, m.kind, m.label, m.cost, m.op, m.atoms, m.failure, m.waits)
@@ -173,7 +176,8 @@ class SearchOutcome:
     graph: Graph
     root: int
     stats: Stats
-    status: str  # "solved" | "unsolvable" | "timeout" | "state-limit" | "memory-limit"
+    # "solved" | "unsolvable" | "timeout" | "state-limit" | "memory-limit" | "depth-limit"
+    status: str
     values: Values | None
     optimal: bool
     reason: str = ""  # which limit stopped the search, in words
@@ -287,6 +291,11 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
             if gr.solved[root]:
                 values = compute_values(gr, root, budget=budget)
                 status, optimal = "solved", values.exact
+            elif gr.depth_cut:  # §6: a limit, not a proof that no policy exists
+                status = "depth-limit"
+                reason = (f"depth limit reached ({len(gr.depth_cut)} states cut at "
+                          f"{max_depth} moves) before a policy was found; raise "
+                          "[limits] max_depth or --max-depth")
         if status in ("timeout", "state-limit", "memory-limit") and gr.solved[root]:
             values = compute_values(gr, root, budget=budget)  # best so far, not optimal
         elif status == "solved" and values is None:
@@ -324,6 +333,7 @@ def _expand(gr: Graph, n: int, heap: list[Entry], stats: Stats, max_depth: int,
         return
     if gr.depth[n] >= max_depth:
         gr.status[n], gr.dead_why[n] = DEAD, f"depth limit {max_depth} reached"
+        gr.depth_cut.add(n)
         return
     moves = sorted(sem.moves(es), key=_move_key)
     g0, d0 = gr.g[n], gr.depth[n] + 1
@@ -353,8 +363,10 @@ def _expand(gr: Graph, n: int, heap: list[Entry], stats: Stats, max_depth: int,
             heappush(heap, (g1 if hfn is None else g1 + hfn(child), g1, c))
         else:
             if g1 < gs[c] and status[c] == OPEN:
-                gs[c], gr.depth[c] = g1, d0
+                gs[c] = g1
                 heappush(heap, (g1 if hfn is None else g1 + hfn(states[c]), g1, c))
+            if d0 < gr.depth[c]:
+                _lower_depth(gr, c, d0, heap, max_depth, hfn)
             gr.add_parent(c, n)
         edges.append(Edge(gr.descriptor(m, c), c, pid))
     gr.edges[n] = tuple(edges)
@@ -364,6 +376,36 @@ def _expand(gr: Graph, n: int, heap: list[Entry], stats: Stats, max_depth: int,
     for e in edges:
         if e.child >= 0 and gr.solved[e.child]:
             _child_solved(gr, n)
+
+
+def _lower_depth(gr: Graph, c: int, d: int, heap: list[Entry], max_depth: int,
+                 hfn: Heuristic | None) -> None:
+    """§6: a shorter path to ``c`` was found: its depth (the least number of moves from the
+    root over the paths found) becomes ``d``, and so on down the expanded nodes below it; a
+    node the depth limit had cut that is now above the limit is open again::
+
+        stack = [(c, d)]
+        while stack: (x, d) = pop
+            if d >= depth[x]: continue
+            depth[x] = d
+            if x was cut by the depth limit and d < max_depth: reopen x (queue it by f)
+            elif x is expanded: push (y, d + 1) for each child y of x
+    """
+    stack = [(c, d)]
+    while stack:
+        x, dx = stack.pop()
+        if dx >= gr.depth[x]:
+            continue
+        gr.depth[x] = dx
+        if x in gr.depth_cut:
+            if dx < max_depth:
+                gr.depth_cut.discard(x)
+                gr.status[x] = OPEN
+                del gr.dead_why[x]
+                gx = gr.g[x]
+                heapq.heappush(heap, (gx if hfn is None else gx + hfn(gr.states[x]), gx, x))
+        elif gr.status[x] == EXPANDED:
+            stack.extend((e.child, dx + 1) for e in gr.edges[x] if e.child >= 0)
 
 
 def _child_solved(gr: Graph, p: int) -> None:

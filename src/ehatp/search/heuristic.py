@@ -139,6 +139,7 @@ class Heuristic:
         self._human = (least_costs(d.human, price), least_costs(d.human, one))
         # the cheapest move of each agent (§4-§5; the opening's silence apart)
         self.robot_move: Cost = min([_exact(c.wait), _exact(c.inform),
+                                     *([_exact(c.ask)] if p.communication.robot_asks else []),
                                      *(price(op) for op in d.robot.operators.values())])
         self.human_move: Cost = min([_exact(c.pass_), _exact(c.ask),
                                      *(price(op) for op in d.human.operators.values())])
@@ -149,7 +150,9 @@ class Heuristic:
         """§6-§7: a lower bound on the worst-case cost from ``es`` to a goal (0 at a goal,
         INF when an agenda can never finish)."""
         rc, rn = self._robot_agendas.get(es.robot_agenda) or self.agenda(es.robot_agenda, True)
-        hc, hn = self._human_agendas.get(es.human_agenda) or self.agenda(es.human_agenda, False)
+        # §3: the robot cannot tell the hypotheses apart, and a goal finishes one of them at
+        # least (each bound is consistent, so their minimum is)
+        hc, hn = self.human_bound(es.human_agendas)
         robot_turn = es.turn == ROBOT
         r: Bound = rc
         if hn and self.robot_move:
@@ -162,6 +165,14 @@ class Heuristic:
             if x > h:
                 h = x
         return r + h
+
+    def human_bound(self, agendas: tuple[Agenda, ...]) -> tuple[Bound, Bound]:
+        """§3, §7: the least cost and count of finishing any hypothesis of ``A_H``."""
+        if len(agendas) == 1:
+            h = agendas[0]
+            return self._human_agendas.get(h) or self.agenda(h, False)
+        bounds = [self.agenda(h, False) for h in agendas]
+        return min(c for c, _ in bounds), min(n for _, n in bounds)
 
     def agenda(self, agenda: Agenda, robot: bool) -> tuple[Bound, Bound]:
         """§1: the least cost and the least number of actions that finishing ``agenda`` takes

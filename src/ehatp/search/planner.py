@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from ..model.grounding import ground_problem
+from ..model.options import Intentions
 from ..model.problem import Problem
 from ..policy_format import Policy
 from . import symmetry as _symmetry
@@ -17,7 +18,8 @@ from .policy import explain_failure, extract, realise
 
 @dataclass
 class Result:
-    status: str  # "solved" | "unsolvable" | "timeout" | "state-limit" | "memory-limit"
+    # "solved" | "unsolvable" | "timeout" | "state-limit" | "memory-limit" | "depth-limit"
+    status: str
     policy: Policy | None
     stats: dict[str, Any] = field(default_factory=dict)
     reason: str = ""
@@ -28,7 +30,7 @@ class Result:
         return self.policy is not None
 
 
-LIMITS = ("timeout", "state-limit", "memory-limit")
+LIMITS = ("timeout", "state-limit", "memory-limit", "depth-limit")
 
 
 def solve(problem: Problem, *, timeout: float | None = None, max_states: int | None = None,
@@ -113,13 +115,42 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
         # name the goal literals or agendas that fail everywhere; a line of play that dies
         # is only the fallback (it is one of many, and may look arbitrary)
         graph, root = out.graph, out.root
-        reason = "no policy exists: " + diagnose(grounded, graph,
-                                                 lambda: explain_failure(graph, root))
+        hidden = ""
+        if any(len(es.human_agendas) > 1 for es in graph.states):
+            hidden = _hidden_choice(problem, budget, max_states, max_depth)
+        reason = "no policy exists: " + hidden + diagnose(grounded, graph,
+                                                          lambda: explain_failure(graph, root))
     elif status == "solved" and not optimal:  # §7: expected cost on a graph with cycles
         reason = ("not proven optimal: the solvable graph has cycles, so choices inside them "
                   "were restricted to those of the worst-case pass")
     budget.phase = "done"
     return Result(status, policy, stats, reason, optimal)
+
+
+def _hidden_choice(problem: Problem, budget: Budget, max_states: int | None,
+                   max_depth: int | None) -> str:
+    """docs/semantics.md §3-§4: when a robot that saw the human's method choices would have
+    a policy, the choice it cannot see is the reason there is none: return it in words
+    (the first human move of that policy whose label had to name the intention), else ""."""
+    seen = replace(problem, human=replace(problem.human, intentions=Intentions.VISIBLE))
+    try:
+        other = solve(seen, max_states=max_states, max_depth=max_depth, budget=budget)
+    except LimitReached:
+        return ""
+    if other.policy is None:
+        return ""
+    for node in other.policy.nodes:
+        told = [m.action for m in node.moves if m.action.endswith("]") and " [" in m.action]
+        if told:
+            act = told[0].partition(" [")[0]
+            means = " or ".join(t.partition(" [")[2][:-1] for t in told
+                                if t.partition(" [")[0] == act)
+            h = problem.domain.human_name
+            return (f"the robot cannot see which method {h} chose when it does {act} (for "
+                    f"{means}); with [human] intentions = \"visible\", or a question "
+                    f"([communication] robot_asks = true), a policy exists (worst case "
+                    f"{other.policy.worst_case}); ")
+    return ""
 
 
 def _restart(live: Stats) -> None:

@@ -61,12 +61,13 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
     def agenda(ag: Agenda) -> list[str]:  # a partially ordered block as {a | b} (§1)
         return sem.net.names_of(ag)
 
-    def move_of(e: Edge, before: int) -> PolicyMove:
+    def move_of(e: Edge) -> PolicyMove:
         move: Move = e.move
         name, call_args, label = sem.describe(move)
         told: list[str] = []
-        if move.kind in (ACTION, WAIT) and move.atoms:  # said while acting (§5), as labelled
-            told = list(sem.literals(before, move.atoms))
+        if move.kind in (ACTION, WAIT) and move.atoms:  # said with a move (§5): as it is after
+            assert move.child is not None
+            told = list(sem.literals(move.child.true, move.atoms))
         return PolicyMove(agent=r_name if move.agent == ROBOT else h_name, kind=move.kind,
                           action=label, name=name, args=list(call_args), cost=move.cost,
                           to=index[e.child], told=told)
@@ -87,9 +88,11 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
             divergence=([g.atoms[b] if t >> b & 1 else f"not {g.atoms[b]}" for b in bits_of(div)]
                         if not div & g.multi_mask else g.literals(t, div)),  # values whole
             world_diffs=diffs, state=g.state_atoms(t), robot_agenda=agenda(es.robot_agenda),
-            human_agenda=agenda(es.human_agenda),
+            human_agenda=agenda(es.human_agendas[0]),
             to_move=None if goal else (r_name if es.turn == ROBOT else h_name),
-            value=0, goal=goal, moves=[move_of(e, t) for e in chosen(n)]))
+            value=0, goal=goal, moves=[move_of(e) for e in chosen(n)],
+            hypotheses=([agenda(h) for h in es.human_agendas] if len(es.human_agendas) > 1
+                        else [])))
     costs = {"inform": num(p.costs.inform), "ask": num(p.costs.ask),
              "wait": num(p.costs.wait), "pass": num(p.costs.pass_),
              "actions": {k: num(v) for k, v in sorted(p.costs.actions.items())}}

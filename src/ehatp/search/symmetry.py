@@ -43,7 +43,6 @@ from ..epistemic.state import EState, Worlds, normalize, states_of
 from ..model.formula import And, Formula, GAtom, GTest, Not, Or
 from ..model.grounding import GModel, Grounded
 from ..model.htn import Agenda
-from ..model.options import Relevance
 
 OVERRIDE: bool | None = None
 """When not None, replaces every problem's ``[limits] symmetry`` (benchmarks use it to compare
@@ -239,7 +238,8 @@ class Symmetry:
             return es
         return es._replace(true=self.state(pid, es.true),
                            robot_agenda=self.agenda(pid, es.robot_agenda),
-                           human_agenda=self.agenda(pid, es.human_agenda),
+                           human_agendas=tuple(sorted(self.agenda(pid, h)
+                                                      for h in es.human_agendas)),
                            worlds=self.worlds(pid, es.worlds))
 
     # -- canonical form -----------------------------------------------------------------------
@@ -298,14 +298,14 @@ class Symmetry:
         representative is a real state of the same value (§3)."""
         tsig = self._state_sig(es.true)
         rsig = self._agenda_sig(es.robot_agenda)
-        hsig = self._agenda_sig(es.human_agenda)
+        hsigs = [self._agenda_sig(h) for h in es.human_agendas]
         wsigs = [(self._state_sig(s), self._agenda_sig(a)) for s, a in es.worlds]
         perm: list[int] | None = None
         for cls in self.classes:
             keys = []
             for o in cls:
                 ws = sorted((ss[o], sa[o]) for ss, sa in wsigs)
-                keys.append((tsig[o], rsig[o], hsig[o], ws))
+                keys.append((tsig[o], rsig[o], sorted(h[o] for h in hsigs), ws))
             order = sorted(range(len(cls)), key=keys.__getitem__)
             if any(k != j for j, k in enumerate(order)):
                 if perm is None:
@@ -531,14 +531,14 @@ class SymSemantics(Semantics):
         self.unsafe = ("a belief revision whose result depends on the order of the atoms "
                        "observed")
 
-    def _informing_set(self, es: EState) -> int:
-        m = super()._informing_set(es)
-        if m and self.watch and not self.unsafe and self._tied(es, m):
+    def informing_set(self, es: EState, plan: bool) -> int:
+        m = super().informing_set(es, plan)
+        if m and self.watch and not self.unsafe and self._tied(es, m, plan):
             self.unsafe = ("an informing set chosen by name among equally good ones that "
                            "are not each other's image")
         return m
 
-    def _tied(self, es: EState, chosen: int) -> bool:
+    def _tied(self, es: EState, chosen: int, plan: bool) -> bool:
         """Whether another set of the chosen size is as good as ``chosen`` on everything but
         names (§5), one of them naming an interchangeable object, and telling it leads to a
         state with another canonical form than telling ``chosen``. When every tied set's
@@ -552,16 +552,9 @@ class SymSemantics(Semantics):
             div |= s ^ t
         cands = g.units(div)
         size = len(g.units(chosen))
-        hv_t = self.human_view(es.human_agenda, (t,))
-        rv_t = frozenset(op for op, _ in self.R.refine(es.robot_agenda, t))
-        plan = self.comm.relevance == Relevance.PLAN
 
         def valid(w2: Worlds, want_r: bool) -> bool:
-            if self.human_view(es.human_agenda, states_of(w2)) != hv_t:
-                return False
-            if want_r and self.robot_view(w2) != rv_t:
-                return False
-            return not (plan and self._plans_differ(es.human_agenda, t, w2))
+            return self.fixes(es, w2, want_r, plan)
 
         def rank(m: int, combo: Iterable[int]) -> tuple[int, int]:
             w2 = self.observe(t, es.worlds, m)

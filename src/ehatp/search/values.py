@@ -36,7 +36,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
-from ..epistemic.semantics import ACTION, ASK, INFORM, WAIT, Move
+from ..epistemic.semantics import ACTION, ANNOUNCE, ASK, INFORM, WAIT, Move
 from ..model.options import Objective, ObjectiveKind
 from ..model.problem import Cost
 
@@ -179,8 +179,9 @@ class LiveWorst:
     satisfies its min/max equation again, and with positive costs those equations have one
     solution only (a node below its least-fixpoint value would need a child further below, on
     and on, down a strictly decreasing chain), so the values are Knuth's exactly. The robot's
-    zero-cost ``silence`` keeps this true (it leads to a human node, whose moves all cost more
-    than 0); if any other move could cost 0 the root is recomputed by a full pass instead."""
+    zero-cost ``silence`` and the human's zero-cost ``answer`` keep this true (each leads to a
+    human node that answers nothing, whose moves all cost more than 0); if any other move could
+    cost 0 the root is recomputed by a full pass instead."""
 
     def __init__(self, gr: Graph, budget: Budget | None = None) -> None:
         from .andor import GOAL
@@ -496,4 +497,4 @@ def weighted_mean(weights: list[Fraction], xs: list[Cost]) -> Cost:
 
 def speaks(m: Move) -> bool:
     """A communication (§7 ties): ``inform``, ``ask``, or a move that speaks while acting."""
-    return m.kind in (INFORM, ASK) or (m.kind in (ACTION, WAIT) and m.atoms != 0)
+    return m.kind in (INFORM, ASK, ANNOUNCE) or (m.kind in (ACTION, WAIT) and m.atoms != 0)
