@@ -210,37 +210,24 @@ def answers_of(problem: Problem, policy: Policy) -> dict[tuple[int, str], bool]:
     """The robot's truthful answer to every question the policy's human may ask, by (policy
     node, question label): the policy is walked with the problem's semantics (each node once).
     Raises :class:`~ehatp.tools.executor.PolicyMismatch` when the policy does not fit."""
-    from .executor import Executor, PolicyMismatch
+    from .executor import Executor
 
     ex = Executor(problem, policy)
     ex.replay_opening()
     states = {0: ex.state}
     out: dict[tuple[int, str], bool] = {}
-    norm = "".join
     for i in policy.topological_order():
-        es = states[i]
-        options = ex.sem.moves(es)
-        for m in policy.nodes[i].moves:
+        es, node = states[i], policy.nodes[i]
+        for m in node.moves:
             if m.kind == "ask":
-                yes = ex._answer(es, m.action)
+                yes = ex.answer(es, m.action)
                 if yes is not None:
                     out[(i, m.action)] = yes
-            if m.to in states:
-                continue
-            # one label may stand for several moves (the same action reached by two methods):
-            # the one meant is the one whose result the policy node records
-            to = policy.nodes[m.to]
-            same = [o.child for o in options
-                    if norm(o.label.split()) == norm(m.action.split()) and o.child is not None]
-            child = next((c for c in same
-                          if ex.grounded.state_atoms(c.true) == to.state
-                          and ex._agenda(c.human_agenda) == to.human_agenda
-                          and ex._agenda(c.robot_agenda) == to.robot_agenda
-                          and len(c.worlds) == to.worlds), None)
-            if child is None:
-                raise PolicyMismatch(f"policy node {i}: {m.agent} {m.action}, to node {m.to}, is "
-                                     "not a move here; the policy does not fit this problem")
-            states[m.to] = child
+            if m.to not in states:
+                # the move the edge records (one label may stand for several moves)
+                child = ex.edge_move(node, m, es).child
+                assert child is not None
+                states[m.to] = child
     return out
 
 

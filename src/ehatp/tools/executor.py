@@ -20,14 +20,14 @@ import dataclasses
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from ..epistemic.semantics import ACTION, ASK, INFORM, WAIT, Move, Semantics, bits_of
+from ..epistemic.semantics import ACTION, ASK, INFORM, PASS, WAIT, Move, Semantics, bits_of
 from ..epistemic.state import HUMAN, ROBOT, EState, Worlds, states_of
 from ..errors import EhatpError
 from ..model.formula import conj
 from ..model.grounding import Grounded, ground_problem
 from ..model.htn import Agenda
 from ..model.problem import Cost, Problem
-from ..policy_format import Policy, PolicyNode
+from ..policy_format import Policy, PolicyMove, PolicyNode
 
 if TYPE_CHECKING:
     from ..search.planner import Result
@@ -124,6 +124,12 @@ def _norm(label: str) -> str:
     return "".join(label.split())
 
 
+def human_agendas(es: EState) -> tuple[Agenda, ...]:
+    """Return the human agendas the robot cannot tell apart at ``es`` (docs/semantics.md §3,
+    "What the robot observes"): the one place the executor reads them."""
+    return (es.human_agenda,)
+
+
 class Executor:
     """Follow ``policy`` (solved from ``problem`` when None) through one execution."""
 
@@ -150,6 +156,7 @@ class Executor:
         self.history: list[Step] = []
         self._opening = list(policy.after)
         self.node: PolicyNode | None = None
+        self._moves_at: tuple[EState, list[Move]] | None = None  # the last state's moves
         if not self._opening:
             self._enter_policy()
 
@@ -185,7 +192,7 @@ class Executor:
         """What the robot must do now; None when it is the human's turn or the task is done."""
         if self.done or self.state.turn != ROBOT:
             return None
-        return self._action(self._robot_move())
+        return self._action(self._robot_move()[0])
 
     def robot_action_done(self, label: str | None = None) -> Step:
         """Record that the robot did its action (``label``, when given, is checked)."""
@@ -193,18 +200,30 @@ class Executor:
             raise ExecutionError(f"it is not {self.robot_name}'s turn: "
                                  + ("the task is done" if self.done
                                     else f"{self.human_name} is to move"))
-        move = self._robot_move()
+        move, edge = self._robot_move()
         if label is not None and _norm(self.strip_agent(label)) != _norm(move.label):
             raise ExecutionError(f"{self.robot_name} reports {label!r} but the policy says "
                                  f"{move.label}")
-        return self._advance(move)
+        return self._advance(move, edge)
 
     # -- the human ------------------------------------------------------------------------------
     def possible_human_moves(self) -> list[Move]:
         """Every move the human model allows now (the semantics' view), policy or not."""
         if self.done or self.state.turn != HUMAN:
             return []
-        return self.sem.moves(self.state)
+        return self._moves()
+
+    def legal_human_moves(self) -> list[Move]:
+        """Return every move the human can make now: the model's options
+        (:meth:`possible_human_moves`) and a ``pass`` the fairness rule leaves out after a
+        forced robot wait (docs/semantics.md §4: such a pass *need not be covered*, which does
+        not make it impossible; a human who does it leaves the policy, and ``execute --replan``
+        plans again from there)."""
+        moves = self.possible_human_moves()
+        if moves and self.state.forced and not any(m.kind == PASS for m in moves):
+            moves = moves + [m for m in self.sem.moves(self.state._replace(forced=False))
+                             if m.kind == PASS]
+        return moves
 
     def expected_human_actions(self) -> list[Action]:
         """The human moves the policy covers now (empty at the robot's turn or when done)."""
@@ -212,51 +231,28 @@ class Executor:
             return []
         if self.node is None:
             return [self._action(self._follow(self._opening[0]))]
-        by_label = {_norm(m.label): m for m in self.sem.moves(self.state)}
-        out = []
-        for pm in self.node.moves:
-            m = by_label.get(_norm(pm.action))
-            if m is None:
-                raise PolicyMismatch(f"policy node {self.node.id} has a move {self.human_name} "
-                                     f"{pm.action} (to node {pm.to}), which is not a move of "
-                                     f"{self.human_name} here")
-            out.append(self._action(m))
-        return out
+        return [self._action(self.edge_move(self.node, pm)) for pm in self.node.moves]
 
     def observe_human_action(self, action: str | Action) -> Step:
         """Record what the human did (a label such as ``place(w, box2)``, ``ask(...)``,
-        ``pass``; the human's name may lead). Raises :class:`UncoveredHumanAction` when the
-        policy has no branch for it (nothing changes then)."""
+        ``pass``; the human's name may lead). The policy is followed along the edge the policy
+        recorded for that label (:meth:`edge_move`). Raises :class:`UncoveredHumanAction` when
+        the policy has no branch for it (nothing changes then): its ``reason`` says whether
+        the move is not one of the human's here, fails, or is legal but not covered."""
         if self.done or self.state.turn != HUMAN:
             raise ExecutionError(f"it is not {self.human_name}'s turn: "
                                  + ("the task is done" if self.done
                                     else f"{self.robot_name} is to move"))
         label = action.label if isinstance(action, Action) else self.strip_agent(action)
-        want = _norm(label)
-        moves = self.sem.moves(self.state)
-        possible = [m.label for m in moves]
-        expected = [a.label for a in self.expected_human_actions()]
-        who = self.human_name
-        move = next((m for m in moves if _norm(m.label) == want), None)
-        if move is None:
-            raise UncoveredHumanAction(label, expected, possible,
-                                       f"{who} did {label}, which is not a move of {who} here "
-                                       f"(the model allows {', '.join(possible)})")
-        if move.child is None:
-            raise UncoveredHumanAction(move.label, expected, possible,
-                                       f"{who} did {move.label}, which fails: {move.failure}")
-        if _norm(move.label) not in {_norm(e) for e in expected}:
-            where = ("the problem's fixed opening" if self.node is None
-                     else f"policy node {self.node.id}")
-            raise UncoveredHumanAction(move.label, expected, possible,
-                                       f"{who} did {move.label}, which {where} does not cover")
-        return self._advance(move)
+        move, edge = self._human_move(label)
+        return self._advance(move, edge)
 
     def copy(self) -> Executor:
         """An independent executor at the same point of the same execution, without grounding
         the problem again (e.g. to run many executions from one start)."""
         other = copy.copy(self)
-        other.sem = _TracingSemantics(self.grounded)
+        other.sem = copy.copy(self.sem)  # its memo tables are shared: they are pure
+        other.sem.seen = {}
         other.history, other._opening = list(self.history), list(self._opening)
         return other
 
@@ -267,7 +263,7 @@ class Executor:
         returns their steps. Nothing happens when there is no opening left."""
         steps = []
         while self.node is None:
-            steps.append(self._advance(self._follow(self._opening[0])))
+            steps.append(self._advance(self._follow(self._opening[0]), None))
         return steps
 
     def as_problem(self) -> Problem:
@@ -290,9 +286,10 @@ class Executor:
     def replan(self, action: str | Action | None = None, **solve_options: Any) -> Result:
         """Plan again from where the execution is, and follow the new policy from its root.
 
-        ``action``, when given, is a human move the human model allows now
-        (:meth:`possible_human_moves`) that the policy may not cover: it is applied to the
-        tracked state first (a step marked ``replanned``). Then :meth:`as_problem` is solved
+        ``action``, when given, is a human move the human can make now
+        (:meth:`legal_human_moves`: the model's options, and a pass the fairness rule lets a
+        policy leave out) that the policy may not cover: it is applied to the tracked state
+        first (a step marked ``replanned``). Then :meth:`as_problem` is solved
         (``solve_options`` go to :func:`ehatp.solve`) and its policy replaces :attr:`policy`
         and :attr:`problem`. Raises :class:`UncoveredHumanAction` when ``action`` is not a move
         of the human here or fails, and :class:`ExecutionError` when no policy is found; nothing
@@ -306,19 +303,7 @@ class Executor:
                                      + ("the task is done" if self.done
                                         else f"{self.robot_name} is to move"))
             label = action.label if isinstance(action, Action) else self.strip_agent(action)
-            moves = self.sem.moves(self.state)
-            possible = [m.label for m in moves]
-            expected = [a.label for a in self.expected_human_actions()]
-            who = self.human_name
-            move = next((m for m in moves if _norm(m.label) == _norm(label)), None)
-            if move is None:
-                raise UncoveredHumanAction(label, expected, possible,
-                                           f"{who} did {label}, which is not a move of {who} "
-                                           f"here (the model allows {', '.join(possible)})")
-            if move.child is None:
-                raise UncoveredHumanAction(move.label, expected, possible,
-                                           f"{who} did {move.label}, which fails: "
-                                           f"{move.failure}")
+            move = self._legal_move(label)
         problem = self.as_problem()
         if move is not None:  # played after the history; the rest of the opening is dropped
             problem = dataclasses.replace(problem, after=tuple(
@@ -341,7 +326,7 @@ class Executor:
         except PolicyMismatch:
             self.state = before
             raise
-        self.sem.seen.clear()
+        self._forget()
         self.problem, self.policy, self.node, self._opening = problem, result.policy, root, []
         if move is not None:
             self.history.append(Step(len(self.history) + 1, self._action(move, before.true),
@@ -397,7 +382,7 @@ class Executor:
         elif act.kind == INFORM:
             lines.append(f"{R} tells {H}: {', '.join(act.args)} ({n0} -> {_worlds(len(mid))})")
         elif act.kind == ASK:
-            answer = self._answer(b, act.label)
+            answer = self.answer(b, act.label)
             said = "" if answer is None else f"; {R} answers {'yes' if answer else 'no'}"
             lines.append(f"{H} asks whether {act.args[0]}{said} ({n0} -> {_worlds(len(mid))})")
         if step.assessed is not None and step.assessed != a.worlds:
@@ -451,11 +436,75 @@ class Executor:
             lines.append(f"  ... and {len(ws) - MAX_WORLDS_LISTED} more")
         return lines
 
+    # -- following the policy's edges ----------------------------------------------------------
+    def edge_move(self, node: PolicyNode, edge: PolicyMove, es: EState | None = None) -> Move:
+        """Return the move of the semantics at ``es`` (default: the state now) that is the
+        policy's recorded ``edge`` out of ``node``: among the moves labelled ``edge.action``
+        -- several, when two robot methods start with the same action (docs/semantics.md §4)
+        -- the one whose child is the state the policy records at node ``edge.to``
+        (:meth:`differences`), never merely the first with that label. Raises
+        :class:`PolicyMismatch` when there is none: the policy does not fit the problem."""
+        want = _norm(edge.action)
+        same = [m for m in self._moves(es) if _norm(m.label) == want]
+        to = self.policy.nodes[edge.to]
+        fit = [m for m in same if m.child is not None and not self.differences(m.child, to)]
+        if len(fit) > 1:  # equal on what the node records in short: its worlds decide
+            fit = [m for m in fit if m.child is not None
+                   and self._world_diffs(m.child) == to.world_diffs] or fit
+        if fit:
+            return fit[0]
+        who = edge.agent
+        if not same:
+            raise PolicyMismatch(f"policy node {node.id} says {who} {edge.action}, which is not "
+                                 f"a move of {who} here; the policy does not fit this problem")
+        why = sorted({d for m in same if m.child is not None
+                      for d in self.differences(m.child, to)}) or ["it fails"]
+        raise PolicyMismatch(f"policy node {node.id} says {who} {edge.action} to node "
+                             f"{edge.to}, but no move {edge.action} here leads to that node "
+                             f"(they differ on {', '.join(why)}); the policy does not fit this "
+                             "problem")
+
+    def differences(self, es: EState, node: PolicyNode) -> list[str]:
+        """Return what policy node ``node`` records differently from the epistemic state
+        ``es`` (empty when it is ``es``'s node): the agent to move, the K-counter, the number
+        of worlds, the robot's agenda, the human agendas the robot cannot tell apart
+        (docs/semantics.md §3) and the true state."""
+        out = []
+        if node.to_move is not None and node.to_move != self.sem.names[es.turn]:
+            out.append("to_move")
+        if es.k != node.k:
+            out.append("k")
+        if len(es.worlds) != node.worlds:
+            out.append("worlds")
+        if self._agenda(es.robot_agenda) != node.robot_agenda:
+            out.append("robot_agenda")
+        if sorted(self._agenda(a) for a in human_agendas(es)) != sorted(node.human_agendas):
+            out.append("human_agendas")
+        if self.grounded.state_atoms(es.true) != node.state:
+            out.append("state")
+        return out
+
     # -- internals ------------------------------------------------------------------------------
     def strip_agent(self, label: str) -> str:
         """Drop a leading agent name (``H place(w, box2)`` -> ``place(w, box2)``)."""
         head, _, rest = label.strip().partition(" ")
         return rest.strip() if rest and head in (self.robot_name, self.human_name) else label
+
+    def _moves(self, es: EState | None = None) -> list[Move]:
+        """The semantics' moves at ``es`` (default: now), kept for the last state asked."""
+        es = self.state if es is None else es
+        if self._moves_at is None or self._moves_at[0] is not es:
+            self._moves_at = (es, self.sem.moves(es))
+        return self._moves_at[1]
+
+    def _forget(self) -> None:
+        """Forget what the semantics computed for the previous state."""
+        self.sem.seen.clear()
+        self._moves_at = None
+
+    def _world_diffs(self, es: EState) -> list[dict[str, list[str]]]:
+        t = es.true
+        return [self.grounded.world_diff(s, t) for s in states_of(es.worlds)]
 
     def _follow(self, label: str) -> Move:
         try:
@@ -464,27 +513,65 @@ class Executor:
             raise PolicyMismatch(f"the problem's opening step {label!r} cannot be played: {e}"
                                  ) from None
 
-    def _robot_move(self) -> Move:
+    def _robot_move(self) -> tuple[Move, PolicyMove | None]:
+        """The robot's move now and the policy's edge it follows (None within the opening)."""
         if self.node is None:
-            return self._follow(self._opening[0])
+            return self._follow(self._opening[0]), None
         moves = self.node.moves
         if len(moves) != 1:
             raise PolicyMismatch(f"policy node {self.node.id} is a robot node with "
                                  f"{len(moves)} moves, not 1")
-        label = moves[0].action
-        move = next((m for m in self.sem.moves(self.state) if _norm(m.label) == _norm(label)),
-                    None)
-        if move is None or move.child is None:
-            raise PolicyMismatch(f"policy node {self.node.id} says {self.robot_name} {label}, "
-                                 f"which is not a move of {self.robot_name} here; "
-                                 "the policy does not fit this problem")
+        return self.edge_move(self.node, moves[0]), moves[0]
+
+    def _legal_move(self, label: str) -> Move:
+        """The human's move ``label`` among :meth:`legal_human_moves`; raises
+        :class:`UncoveredHumanAction` when it is none of them or fails (a false belief)."""
+        want, who = _norm(label), self.human_name
+        legal = self.legal_human_moves()
+        same = [m for m in legal if _norm(m.label) == want]
+        move = next((m for m in same if m.child is not None), None)
+        if move is None:
+            possible = [m.label for m in legal]
+            expected = [a.label for a in self.expected_human_actions()]
+            if not same:
+                raise UncoveredHumanAction(label, expected, possible,
+                                           f"{who} did {label}, which is not a move of {who} "
+                                           f"here (the model allows {', '.join(possible)})")
+            raise UncoveredHumanAction(same[0].label, expected, possible,
+                                       f"{who} did {same[0].label}, which fails: "
+                                       f"{same[0].failure}")
         return move
 
-    def _advance(self, move: Move) -> Step:
+    def _human_move(self, label: str) -> tuple[Move, PolicyMove | None]:
+        """The human's move ``label`` along the policy's edge for it (None within the
+        opening); raises :class:`UncoveredHumanAction` when the policy does not cover it."""
+        move = self._legal_move(label)
+        want = _norm(move.label)
+        if self.node is None:
+            opening = self._follow(self._opening[0])
+            if _norm(opening.label) == want:
+                return opening, None
+            where = "the problem's fixed opening"
+        else:
+            edge = next((pm for pm in self.node.moves if _norm(pm.action) == want), None)
+            if edge is not None:
+                return self.edge_move(self.node, edge), edge
+            where = f"policy node {self.node.id}"
+        who = self.human_name
+        legal = self.legal_human_moves()
+        aside = ("" if any(m is move for m in self._moves()) else
+                 " (a policy need not: after a forced robot wait, docs/semantics.md §4)")
+        raise UncoveredHumanAction(move.label, [a.label for a in self.expected_human_actions()],
+                                   [m.label for m in legal],
+                                   f"{who} did {move.label}, which {where} does not cover{aside}")
+
+    def _advance(self, move: Move, edge: PolicyMove | None) -> Step:
+        """Play ``move``: the tracked state becomes its child and, past the opening, the
+        policy moves to the node of ``edge``, the edge actually taken."""
         assert move.child is not None
         before = self.state
         assessed = self.sem.seen.get((move.child.true, move.child.worlds))
-        self.sem.seen.clear()  # only the chosen move's assessment matters
+        self._forget()  # only the chosen move's assessment matters
         self.state = move.child
         opening = self.node is None
         node: PolicyNode | None = None
@@ -494,11 +581,10 @@ class Executor:
                 self._enter_policy()
                 node = self.node
         else:
-            assert self.node is not None
-            # the policy's move with this label: the node it leads to may be shared by
-            # other paths, the tracked state is checked against it all the same
-            pm = next(m for m in self.node.moves if _norm(m.action) == _norm(move.label))
-            node = self.policy.nodes[pm.to]
+            assert edge is not None
+            # the node the edge leads to may be shared by other paths: the tracked state is
+            # checked against it all the same
+            node = self.policy.nodes[edge.to]
             self.node = node
             self._check(node)
         step = Step(len(self.history) + 1, self._action(move, before.true), before, self.state,
@@ -529,26 +615,32 @@ class Executor:
                                  "the policy does not fit this problem, solve it again")
 
     def _action(self, m: Move, t: int | None = None) -> Action:
-        """``m`` in the domain's vocabulary, played in the true state ``t`` (default: now)."""
+        """``m`` in the domain's vocabulary, played in the true state ``t`` (default: now).
+        What is said with an action or a wait (``speech = "with-action"``) is told as it is
+        in the true state *after* the move (docs/semantics.md §5)."""
         name, args, label = self.sem.describe(m)
         told: tuple[str, ...] = ()
         if m.kind in (ACTION, WAIT) and m.atoms:  # said while acting (§5), as labelled
-            told = self.sem.literals(self.state.true if t is None else t, m.atoms)
+            after = m.child.true if m.child is not None else self.state.true if t is None else t
+            told = self.sem.literals(after, m.atoms)
         return Action(self.sem.names[m.agent], m.kind, label, name, args, m.cost, told)
 
     def _agenda(self, ag: Agenda) -> list[str]:  # a partially ordered block as {a | b} (§1)
         return self.sem.net.names_of(ag)
 
-    def _answer(self, es: EState, label: str) -> bool | None:
-        """The truthful answer to the human's question ``label`` in ``es``."""
+    def answer(self, es: EState, label: str) -> bool | None:
+        """Return the robot's truthful answer to the human's question ``label`` in ``es``
+        (docs/semantics.md §5: the value of the question's formula in the true state), None
+        when ``label`` is no question the human may ask there."""
         sem = self.sem
         states = states_of(es.worlds)
         full = (1 << len(states)) - 1
-        for u in sem.H.refine_in_all(es.human_agenda, states):
-            if u.worlds != full and u.conds:
-                phi = sem.uncertain_part(conj(*u.conds), states)
-                if f"ask({sem.show(phi)})" == label:
-                    return bool(sem.g.compile(phi)(es.true))
+        for h in human_agendas(es):
+            for u in sem.H.refine_in_all(h, states):
+                if u.worlds != full and u.conds:
+                    phi = sem.uncertain_part(conj(*u.conds), states)
+                    if f"ask({sem.show(phi)})" == label:
+                        return bool(sem.g.compile(phi)(es.true))
         return None
 
     def _assessment(self, t: int, pre: Worlds, post: Worlds) -> str:
