@@ -29,11 +29,10 @@ import graphviz  # type: ignore[import-untyped]
 import typer
 
 from ..model.problem import load
-from ..policy_format import Policy, PolicyMove, PolicyNode
+from ..policy_format import COMM_KINDS, Policy, PolicyMove, PolicyNode
 from .common import Commands, check_policy_problem, die, read_policy, user_errors, write_output
 
 DEFAULT_MAX_NODES = 400  # more than this and a drawing stops being readable
-COMM_KINDS = ("inform", "ask")
 IDLE_KINDS = ("wait", "pass")
 INSTALL_DOT = ("--format svg needs Graphviz's `dot` program, which was not found; install "
                "Graphviz (Debian/Ubuntu: apt-get install graphviz; macOS: brew install graphviz) "
