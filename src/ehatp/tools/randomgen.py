@@ -97,6 +97,7 @@ from ..model.options import (
     Communication,
     HumanModel,
     InformWhere,
+    Intentions,
     Objective,
     ObjectiveKind,
     Passes,
@@ -128,13 +129,18 @@ SETTINGS: dict[str, Sampler] = {
     "costs.wait": _weighted([(1, 6), (2, 1), (0.5, 1)]),
     "costs.pass_": _weighted([(1, 6), (2, 1)]),
     "human.passes_when_blocked": _weighted([(True, 3), (False, 1)]),
-    "human.passes": _weighted([(Passes.FAIR, 9), (Passes.PROTOTYPE, 1)]),
+    # FAIR first then PROTOTYPE last: a seed drawing the prototype rule before "idle" existed
+    # still does
+    "human.passes": _weighted([(Passes.FAIR, 8), (Passes.IDLE, 1), (Passes.PROTOTYPE, 1)]),
+    "human.intentions": _weighted([(Intentions.HIDDEN, 9), (Intentions.VISIBLE, 1)]),
     "human.anticipates": _weighted([(True, 9), (False, 1)]),
     "communication.inform_max_atoms": _weighted([(3, 4), (2, 1), (1, 1)]),
     "communication.inform": _weighted([(InformWhere.COPRESENT, 9), (InformWhere.ANYWHERE, 1)]),
     "communication.speech": _weighted([(Speech.TURN, 9), (Speech.WITH_ACTION, 1)]),
     "communication.relevance": _weighted([(Relevance.NEXT, 9), (Relevance.PLAN, 1)]),
     "communication.ask": _weighted([(True, 9), (False, 1)]),
+    "communication.robot_asks": _weighted([(False, 9), (True, 1)]),
+    "communication.announce": _weighted([(False, 9), (True, 1)]),
     "objective.kind": _weighted([(ObjectiveKind.WORST_CASE, 9), (ObjectiveKind.EXPECTED, 1)]),
     "objective.weights": _weighted([({}, 9), ({"pass": Fraction(1, 2)}, 1)]),
     "objective.ties": _weighted([(DEFAULT_TIES, 8), (("waits", "communications", "length"), 1),
@@ -225,10 +231,13 @@ class ModelSpec:
 
 @dataclass(frozen=True)
 class WorldSpec:
-    """A world the human entertains: the atoms it has wrong, the robot agenda it assumes."""
+    """A world the human entertains: the atoms it has wrong, the robot agenda it assumes.
+    ``blocked`` names the robot action the human expects first there but believes not
+    applicable now (see :data:`BLOCKED`)."""
 
     flips: tuple[str, ...] = ()
     robot_agenda: tuple[str, ...] | None = None
+    blocked: str = ""
 
 
 @dataclass(frozen=True)
@@ -279,6 +288,8 @@ class Spec:
     action_costs: tuple[tuple[str, int], ...]
     settings: tuple[tuple[str, object], ...]  # ("table.field", value), see SETTINGS
     values: tuple[ValueSpec, ...] = ()  # atoms written as state variables or counters
+    twins: tuple[str, ...] = ()  # interchangeable items besides ITEMS (see TWINS)
+    shared: tuple[str, ...] = ()  # methods added with another's first action (see SHARED)
 
     def setting(self, key: str) -> object:
         """A drawn setting (KeyError for an option left at its default)."""
@@ -320,7 +331,8 @@ class Spec:
         cop = "home" + (f" & {self.door}" if self.door else "")
         lines = [f"seed {self.seed}",
                  "atoms: " + ", ".join(f"{a}:{k}" for a, k in self.atoms),
-                 f"items: {list(ITEMS) if self.items else []} glass {list(self.glass)}",
+                 f"items: {list(ITEMS) if self.items else []} glass {list(self.glass)}"
+                 + (f", interchangeable {list(self.twins)}" if self.twins else ""),
                  f"copresence: {cop}", "M_R:", *model(self.robot), "M_H:", *model(self.human)]
         if self.robot_seen is None:
             lines.append("M_R^H: M_R")
@@ -330,10 +342,13 @@ class Spec:
         lines += [f"init: {list(self.init)}",
                   *(f"world {i}: flips {list(w.flips)}"
                     + ("" if w.robot_agenda is None else f", robot agenda {list(w.robot_agenda)}")
+                    + (f" ({w.blocked} believed blocked)" if w.blocked else "")
                     for i, w in enumerate(self.worlds)),
                   f"agendas: robot {list(self.robot_agenda)}, human {list(self.human_agenda)}",
                   f"goal: {lits(self.goal)}", f"action costs: {dict(self.action_costs)}",
                   "settings: " + ", ".join(f"{k}={_show(v)}" for k, v in self.settings)]
+        if self.shared:
+            lines.append("methods sharing another's first action: " + ", ".join(self.shared))
         for v in self.values:
             what = (f"variable over p0..p{v.size - 1} (holds at p1, false sets p{v.off}, "
                     f"seen {v.sight})" if v.kind == "variable" else
@@ -841,9 +856,182 @@ def draw_loops(spec: Spec) -> Spec:
     return spec
 
 
+
+
+SHARED = (0.3, 0.3)
+"""Methods sharing a first action: the share of problems where a robot method (of ``job`` or
+``sub``) gets an alternative that starts with the same ground action and goes on otherwise, and
+the share where a human ``chore`` method does. The robot cannot see which of the human's two
+methods is followed (docs/semantics.md §3); two robot moves share a label where the robot's
+two methods start (§4: an executor must follow the policy's recorded edge, not the first
+label that matches). The alternative keeps the method's precondition (1/2), then the method's
+rest turned by one step, one step shorter, one step longer, or redrawn; it is declared at a
+random place among the methods; M_R^H gets the robot's alternative too (1/2) when it has the
+method. Drawn after the orders, from a generator of its own (see :func:`draw_shared`), so no
+other draw changes."""
+
+
+def _prims(m: ModelSpec) -> list[str]:
+    """The ground actions of ``m``, but ``leave`` and ``back``."""
+    out: list[str] = []
+    for o in m.ops:
+        if o.name not in ("leave", "back"):
+            out += [f"{o.name}({i})" for i in ITEMS] if o.param else [o.name]
+    return out
+
+
+def _alternative(r: random.Random, m: ModelSpec, tasks: Sequence[str]
+                 ) -> tuple[MethodSpec, MethodSpec] | None:
+    """A method of one of ``tasks`` in ``m`` that starts with a ground action, and a new
+    method of the same task starting with that action and going on otherwise (None: no
+    such method)."""
+    bases = [me for me in m.methods if me.task in tasks and me.order is None and not me.free
+             and me.subtasks and "?i" not in me.subtasks[0]
+             and m.op(_head(me.subtasks[0])) is not None]
+    if not bases:
+        return None
+    base = r.choice(bases)
+    first, rest = base.subtasks[0], list(base.subtasks[1:])
+    pool = _prims(m) or [first]
+    way = r.choice(("turn", "shorter", "longer", "other"))
+    droppable = [k for k, s in enumerate(rest) if s not in ("leave", "back")]
+    if way == "turn" and len(set(rest)) > 1:
+        new = rest[1:] + rest[:1]  # differs: not every step is the same
+    elif way == "shorter" and droppable:
+        k = r.choice(droppable)
+        new = rest[:k] + rest[k + 1:]
+    elif way == "other":
+        new = [r.choice(pool) for _ in range(r.randint(1, 2))]
+    else:
+        new = list(rest)
+    if new == rest:  # one step longer
+        new.insert(r.randint(0, len(rest)), r.choice(pool))
+    pre = base.pre if r.random() < 0.5 else ()
+    return base, MethodSpec(base.task, f"{base.name}s", pre, (first, *new))
+
+
+def _insert(m: ModelSpec, k: int, me: MethodSpec) -> ModelSpec:
+    k = min(k, len(m.methods))
+    return replace(m, methods=(*m.methods[:k], me, *m.methods[k:]))
+
+
+def draw_shared(spec: Spec) -> Spec:
+    """``spec`` with the methods of :data:`SHARED` that share another method's first
+    action (their names in ``Spec.shared``)."""
+    robot_share, human_share = SHARED
+    r = random.Random(f"{spec.seed}:shared")
+    added: list[str] = []
+    if r.random() < robot_share:
+        alt = _alternative(r, spec.robot, ("job", "sub"))
+        if alt is not None:
+            base, me = alt
+            k = r.randint(0, len(spec.robot.methods))
+            seen = spec.robot_seen
+            if (seen is not None and base in seen.methods and r.random() < 0.5
+                    and all(seen.op(_head(x)) for x in me.subtasks)):
+                seen = _insert(seen, k, me)
+            spec = replace(spec, robot=_insert(spec.robot, k, me), robot_seen=seen)
+            added.append(f"robot {me.task}.{me.name}")
+    if r.random() < human_share:
+        alt = _alternative(r, spec.human, ("chore",))
+        if alt is not None:
+            _, me = alt
+            spec = replace(spec, human=_insert(spec.human, r.randint(0, len(spec.human.methods)),
+                                               me))
+            added.append(f"human {me.task}.{me.name}")
+    return replace(spec, shared=tuple(added)) if added else spec
+
+
+BLOCKED = 0.2
+"""Blocked attributed robot agendas: the share of problems where one belief world's robot
+agenda starts with an action (of M_R and M_R^H) that the human believes not applicable now (one of its
+precondition literals false in that world, flipped there if need be; its done-condition not
+holding): either the robot's own agenda (when it starts with such an action, 1/2) or that
+action alone (followed by the robot's agenda, 1/2). The human then expects "the robot is not
+done" in that world whatever the robot did (docs/semantics.md §5: expectations are read per
+world; a blocked world contributes "not done"). Drawn before the values (a flipped atom may
+then become a state variable or a counter), from a generator of its own (see
+:func:`draw_blocked`)."""
+
+
+def draw_blocked(spec: Spec) -> Spec:
+    """``spec`` with the blocked world agenda of :data:`BLOCKED` (``WorldSpec.blocked`` names
+    the action)."""
+    r = random.Random(f"{spec.seed}:blocked")
+    if r.random() >= BLOCKED:
+        return spec
+    seen = spec.robot_seen or spec.robot
+    ops = [o for o in seen.ops if not o.param and o.pre and spec.robot.op(o.name)]
+    if not ops:
+        return spec
+    k = r.randrange(len(spec.worlds))
+    w = spec.worlds[k]
+    own = seen.op(spec.robot_agenda[0]) if spec.robot_agenda else None
+    agenda: tuple[str, ...] | None
+    if w.robot_agenda is None and own in ops and r.random() < 0.5:
+        assert own is not None
+        op, agenda = own, None
+    else:
+        op = r.choice(ops)
+        agenda = (op.name, *(spec.robot_agenda if r.random() < 0.5 else ()))
+    a, v = r.choice(op.pre)
+    flips = list(w.flips)
+    if ((a in spec.init) != (a in flips)) == v:  # the literal holds there: flip its atom
+        flips = [f for f in flips if f != a] if a in flips else [*flips, a]
+    state = frozenset(set(spec.init) ^ set(flips))
+    if op.done is not None and _holds(op.done, "", state):
+        return spec  # done there, not blocked
+    world = WorldSpec(tuple(flips), agenda, op.name)
+    return replace(spec, worlds=(*spec.worlds[:k], world, *spec.worlds[k + 1:]))
+
+
+TWINS = 0.4
+TWIN_ITEMS = ("u", "v")
+"""Interchangeable objects: the share of problems with items, and the robot's ``put`` or the
+human's ``take``, that get two more items :data:`TWIN_ITEMS`, named by no agenda, method or
+goal and alike in every respect (both glass or neither; marked alike in the truth and in every
+world), so that swapping them maps the problem onto itself and the symmetry reduction
+(docs/semantics.md §3) has states to merge. With ``put`` the twins start unmarked and the robot
+gets a task ``stow`` (put any unmarked item: a free method), appended to its agenda and to
+M_R^H's model when that has ``put``; with ``take`` the human's ``chore`` gets a method that
+takes any marked item. Drawn last, from a generator of its own (see :func:`draw_twins`)."""
+
+
+def draw_twins(spec: Spec) -> Spec:
+    """``spec`` with the interchangeable items of :data:`TWINS` (in ``Spec.twins``)."""
+    r = random.Random(f"{spec.seed}:twins")
+    if not spec.items or r.random() >= TWINS:
+        return spec
+    put = spec.robot.op("put") is not None
+    take = spec.human.op("take") is not None
+    if not (put or take):
+        return spec
+    marks = tuple(f"mark({t})" for t in TWIN_ITEMS)
+    glass = spec.glass + (TWIN_ITEMS if r.random() < 0.5 else ())
+    worlds = tuple(replace(w, flips=(*w.flips, *marks)) if r.random() < 0.2 else w
+                   for w in spec.worlds)
+    stow = MethodSpec("stow", "st", (("mark(?i)", False),), ("put(?i)",), free=True)
+
+    def with_stow(m: ModelSpec) -> ModelSpec:
+        return replace(m, tasks=(*m.tasks, TaskSpec("stow")), methods=(*m.methods, stow))
+
+    robot, seen, agenda, human = spec.robot, spec.robot_seen, spec.robot_agenda, spec.human
+    if put:
+        robot, agenda = with_stow(robot), (*agenda, "stow")
+        if seen is not None and seen.op("put") is not None:
+            seen = with_stow(seen)
+    if take:
+        human = replace(human, methods=(*human.methods, MethodSpec(
+            "chore", "ct", (("mark(?i)", True),), ("take(?i)",), free=True)))
+    return replace(spec, twins=TWIN_ITEMS, glass=glass, worlds=worlds,
+                   init=spec.init + (() if put else marks), robot=robot, robot_seen=seen,
+                   robot_agenda=agenda, human=human)
+
+
 def draw(seed: int) -> Spec:
     """The spec of seed ``seed`` (deterministic)."""
-    return draw_values(draw_orders(draw_loops(_Drawer(seed).spec())))
+    spec = draw_shared(draw_orders(draw_loops(_Drawer(seed).spec())))
+    return draw_twins(draw_values(draw_blocked(spec)))
 
 
 # --- building ---------------------------------------------------------------------------------
@@ -982,7 +1170,7 @@ def build(spec: Spec, *, reverse: bool = False) -> Problem:
     for table, fields in tables.items():
         cls = TABLES[table]
         kwargs.update(fields if cls is None else {table: cls(**fields)})
-    objects = {"item": order(ITEMS), **({"spot": order(spots)} if spots else {})}
+    objects = {"item": order((*ITEMS, *spec.twins)), **({"spot": order(spots)} if spots else {})}
     return Problem(
         name=f"random-{spec.seed}", domain=d, objects=objects,
         init=frozenset({*(call(a) for a in init), *(value_of(vs, vs.init) for vs in spec.values)}),
@@ -1001,6 +1189,8 @@ def problem(seed: int, *, reverse: bool = False) -> Problem:
 MAX_STATES = 20_000
 TIMEOUT = 4.0
 DETERMINISM_EVERY = 10
+WALK_CAP = 500
+"""Branches of one policy walked through the Executor at most (:func:`check`)."""
 
 
 @dataclass(frozen=True)
@@ -1010,7 +1200,14 @@ class Outcome:
     planner's policy) | nondeterministic (a second solve, or the problem declared in reverse
     order, gives another policy). ``status`` is the planner's; ``detail`` the first line of the
     validator's report or the exception, where it was raised; ``options`` the model options
-    the problem sets away from their defaults (:meth:`Spec.options`)."""
+    the problem sets away from their defaults (:meth:`Spec.options`).
+
+    Every policy the planner returns is also *executed*: walked on its branches through the
+    Executor (``ehatp.tools.walk``); ``branches`` is how many it walked to their end,
+    ``capped`` whether it stopped at :data:`WALK_CAP`, ``unexecutable`` the walk's failure
+    ("" when every branch reached the goal), and ``hidden_choice`` names a human node of the
+    policy file with two moves of one label (:func:`hidden_choices`). Either makes the seed
+    a failure, whatever its kind."""
 
     seed: int
     kind: str
@@ -1019,14 +1216,23 @@ class Outcome:
     checked_determinism: bool = False
     seconds: float = 0.0
     options: tuple[str, ...] = ()  # the model options away from their defaults
+    executed: bool = False  # the policy was walked through the Executor
+    branches: int = 0
+    capped: bool = False
+    unexecutable: str = ""
+    hidden_choice: str = ""
+    walk_seconds: float = 0.0
 
     @property
     def failed(self) -> bool:
-        return self.kind in FAILURES
+        return self.kind in FAILURES or bool(self.unexecutable or self.hidden_choice)
 
 
 FAILURES = ("crash", "disagreement", "nondeterministic")
 KINDS = ("solved", "unsolvable", "limit", *FAILURES)
+EXECUTION = ("executed", "capped", "non-executable", "hidden-choice")
+"""The execution counts of :func:`summary`: policies walked, walks stopped at the cap, walks
+that failed, policies that branch on a hidden choice."""
 
 
 def _where(e: BaseException) -> str:
@@ -1037,13 +1243,35 @@ def _where(e: BaseException) -> str:
     return f"{type(e).__name__}: {msg}{at}"
 
 
+def hidden_choices(policy: Policy) -> list[str]:
+    """The human nodes of ``policy`` (as read from its file) that cover two moves whose labels
+    are equal but for spaces: a robot sees the human's action, never its method
+    (docs/semantics.md §3), so it cannot tell such branches apart. One line per node."""
+    human = policy.agents.get("human")
+    out = []
+    for n in policy.nodes:
+        if n.to_move != human:
+            continue
+        seen: dict[str, int] = {}
+        for m in n.moves:
+            key = "".join(m.action.split())
+            if key in seen:
+                out.append(f"node {n.id}: {human} {m.action} twice (to nodes {seen[key]} and "
+                           f"{m.to})")
+                break
+            seen[key] = m.to
+    return out
+
+
 def check(seed: int, *, determinism: bool | None = None, max_states: int = MAX_STATES,
-          timeout: float = TIMEOUT) -> Outcome:
-    """Solve the problem of ``seed``, validate any policy the planner returns, and (when
-    ``determinism``, by default for one seed in :data:`DETERMINISM_EVERY`) solve it again and
-    declared in reverse order, expecting byte-identical policy JSON."""
+          timeout: float = TIMEOUT, walk_cap: int = WALK_CAP) -> Outcome:
+    """Solve the problem of ``seed``, validate any policy the planner returns, look in its file
+    for a hidden choice and walk it on up to ``walk_cap`` branches through the Executor, and
+    (when ``determinism``, by default for one seed in :data:`DETERMINISM_EVERY`) solve it again
+    and declared in reverse order, expecting byte-identical policy JSON."""
     from ..check.validator import validate
     from ..search.planner import solve
+    from .walk import walk_policy
 
     if determinism is None:
         determinism = seed % DETERMINISM_EVERY == 0
@@ -1051,10 +1279,11 @@ def check(seed: int, *, determinism: bool | None = None, max_states: int = MAX_S
     stage = "draw"
     status = ""
     options: tuple[str, ...] = ()
+    execution: dict[str, Any] = {}
 
     def out(kind: str, detail: str = "", checked: bool = False) -> Outcome:
         return Outcome(seed, kind, status, detail, checked, time.perf_counter() - start,
-                       options)
+                       options, **execution)
 
     try:
         spec = draw(seed)
@@ -1065,9 +1294,20 @@ def check(seed: int, *, determinism: bool | None = None, max_states: int = MAX_S
         r = solve(prob, max_states=max_states, timeout=timeout)
         status = r.status
         if r.policy is not None:
-            stage = "validate"
             # from the policy's file text (format v2), as a user's validate would read it
-            report = validate(prob, Policy.from_dict(json.loads(r.policy.to_json())))
+            text = r.policy.to_json()
+            stage = "validate"
+            report = validate(prob, Policy.from_dict(json.loads(text)))
+            stage = "hidden choice"
+            read = Policy.from_dict(json.loads(text))
+            hidden = hidden_choices(read)
+            stage = "walk"
+            t0 = time.perf_counter()
+            walk = walk_policy(prob, read, cap=walk_cap)
+            execution = {"executed": True, "branches": walk.branches, "capped": walk.capped,
+                         "unexecutable": "" if walk.ok else walk.message.splitlines()[0],
+                         "hidden_choice": "; ".join(hidden),
+                         "walk_seconds": time.perf_counter() - t0}
             if not report.ok:
                 return out("disagreement", report.message.splitlines()[0])
         if r.status in ("timeout", "state-limit"):
@@ -1121,12 +1361,18 @@ def run(seeds: Iterable[int], *, jobs: int = 1,
 
 
 def summary(outcomes: Sequence[Outcome]) -> dict[str, int]:
-    """Counts by kind (every kind present, in :data:`KINDS` order)."""
-    counts = dict.fromkeys(KINDS, 0)
+    """Counts by kind (every kind present, in :data:`KINDS` order), then the execution counts
+    of :data:`EXECUTION`."""
+    counts = dict.fromkeys((*KINDS, *EXECUTION), 0)
     for o in outcomes:
         counts[o.kind] += 1
+        counts["executed"] += o.executed
+        counts["capped"] += o.capped
+        counts["non-executable"] += bool(o.unexecutable)
+        counts["hidden-choice"] += bool(o.hidden_choice)
     return counts
 
 
-__all__ = ["FAILURES", "KINDS", "SETTINGS", "TABLES", "VALUES", "ModelSpec", "Outcome", "Spec",
-           "ValueSpec", "build", "check", "draw", "problem", "run", "summary"]
+__all__ = ["BLOCKED", "EXECUTION", "FAILURES", "KINDS", "SETTINGS", "SHARED", "TABLES", "TWINS",
+           "VALUES", "WALK_CAP", "ModelSpec", "Outcome", "Spec", "ValueSpec", "build", "check",
+           "draw", "hidden_choices", "problem", "run", "summary"]
