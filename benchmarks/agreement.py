@@ -1,16 +1,19 @@
-"""Planner/validator agreement on random problems: solve, validate, re-solve.
+"""Planner/validator agreement on random problems: solve, validate, execute, re-solve.
 
     .venv/bin/python benchmarks/agreement.py --n 10000 [--start SEED] [--jobs N] [--verbose]
-        [--no-symmetry]
+        [--no-symmetry] [--walk-cap N]
     .venv/bin/python benchmarks/agreement.py --show SEED      # print one seed's problem
 
 Solves the random problems of seeds start..start+n-1 (``ehatp.tools.randomgen``), validates
-every policy the planner returns with the independent validator, and on one seed in ten solves
-again (and declared in reverse order), expecting byte-identical policy JSON. A search stopped by
-its limits is counted apart (skipped). Prints every crash and disagreement with its seed (and,
-in braces, the model options its problem sets away from the defaults), then the counts and the
-time taken; exits 1 if there is any crash, disagreement or nondeterminism. ``--no-symmetry``
-solves without the symmetry reduction (docs/semantics.md §3), whatever the problems say.
+every policy the planner returns with the independent validator, executes it (walks it on every
+branch, up to a cap, through the Executor: ``ehatp.tools.walk``), looks in its file for a human
+node with two moves of one label (a branch on a choice the robot cannot see, docs/semantics.md
+§3), and on one seed in ten solves again (and declared in reverse order), expecting
+byte-identical policy JSON. A search stopped by its limits is counted apart (skipped). Prints
+every crash, disagreement, non-executable policy and hidden-choice branch with its seed (and, in
+braces, the model options its problem sets away from the defaults), then the counts and the
+time taken; exits 1 if there is any of them. ``--no-symmetry`` solves without the symmetry
+reduction (docs/semantics.md §3), whatever the problems say.
 """
 
 from __future__ import annotations
@@ -42,6 +45,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="print the problem of SEED and what checking it gives, then exit")
     ap.add_argument("--no-symmetry", action="store_true",
                     help="search without the symmetry reduction (docs/semantics.md §3)")
+    ap.add_argument("--walk-cap", type=int, default=randomgen.WALK_CAP, metavar="N",
+                    help="branches of a policy executed at most (default "
+                         f"{randomgen.WALK_CAP})")
     args = ap.parse_args(argv)
     if args.no_symmetry:  # the workers are forked: they inherit it
         symmetry.OVERRIDE = False
@@ -49,11 +55,19 @@ def main(argv: list[str] | None = None) -> int:
         ap.error("--n must be at least 1")
     if args.jobs < 1:
         ap.error("--jobs must be at least 1")
+    if args.walk_cap < 1:
+        ap.error("--walk-cap must be at least 1")
+    randomgen.WALK_CAP = args.walk_cap  # the workers are forked: they inherit it
 
     if args.show is not None:
         print(randomgen.draw(args.show).describe())
         o = randomgen.check(args.show, determinism=True)
         print(f"\n{o.kind} (planner: {o.status or '-'}) {o.detail}")
+        if o.executed:
+            print(f"executed: {o.branches} branch(es){' (capped)' if o.capped else ''}"
+                  + (f"; fails: {o.unexecutable}" if o.unexecutable else ", every one to the goal"))
+        if o.hidden_choice:
+            print(f"branches on a hidden choice: {o.hidden_choice}")
         return 1 if o.failed else 0
 
     seeds = range(args.start, args.start + args.n)
@@ -76,19 +90,33 @@ def main(argv: list[str] | None = None) -> int:
         if args.verbose or o.failed:
             det = " [determinism checked]" if o.checked_determinism else ""
             opts = f" {{{', '.join(o.options)}}}" if o.options else ""
+            walked = (f", executed {o.branches} branch(es)" + (" (capped)" if o.capped else "")
+                      if o.executed else "")
             print(f"seed {o.seed}: {o.kind} (planner: {o.status or '-'}, "
-                  f"{o.seconds * 1000:.0f} ms){opts}{det}{': ' + o.detail if o.detail else ''}")
+                  f"{o.seconds * 1000:.0f} ms{walked}){opts}{det}"
+                  f"{': ' + o.detail if o.detail else ''}")
+            if o.unexecutable:
+                print(f"  non-executable: {o.unexecutable}")
+            if o.hidden_choice:
+                print(f"  branches on a hidden choice: {o.hidden_choice}")
     c = randomgen.summary(outcomes)
     checked = sum(o.checked_determinism for o in outcomes)
-    failures = sum(c[k] for k in randomgen.FAILURES)
+    failures = sum(o.failed for o in outcomes)
     plain = sum(1 for o in outcomes if o.failed and not o.options)
+    walk_time = sum(o.walk_seconds for o in outcomes)
+    branches = sum(o.branches for o in outcomes)
     print(f"{args.n} problems (seeds {seeds.start}..{seeds.stop - 1}) in {elapsed:.1f} s "
           f"on {args.jobs} job(s); determinism checked on {checked}")
     print(f"solved {c['solved']}, unsolvable {c['unsolvable']}, limit {c['limit']}, "
           f"crashes {c['crash']}, disagreements {c['disagreement']}, "
           f"nondeterministic {c['nondeterministic']}")
-    print("OK: planner and validator agree" if not failures else
-          f"FAIL: {failures} seed(s) with a crash, disagreement or nondeterminism "
+    print(f"executed {c['executed']} policies ({branches} branches, {c['capped']} stopped at "
+          f"{randomgen.WALK_CAP} branches; {walk_time:.1f} s of the workers' time), "
+          f"non-executable {c['non-executable']}, "
+          f"branches on a hidden choice {c['hidden-choice']}")
+    print("OK: planner and validator agree, every policy executes" if not failures else
+          f"FAIL: {failures} seed(s) with a crash, disagreement, nondeterminism, "
+          f"non-executable policy or branch on a hidden choice "
           f"({plain} with every model option at its default)")
     return 1 if failures else 0
 
