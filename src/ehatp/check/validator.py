@@ -13,11 +13,19 @@ path is not checked again, but the state recomputed along that path must equal t
 first visit, so the replay is linear in the policy's nodes and moves, and so are the values and
 the branch counts, computed over the graph children first.
 
-The problem's options are read as the document states them: the human's pass rule and whether
-it anticipates unseen robot turns (``[human]``, §4), where and how the robot may inform and
-whether the human asks (``[communication]``, §5), and the objective the values are under
-(``[objective]``, §7). Both the worst-case and the expected value of every node are recomputed
-from the validator's own move costs.
+The problem's options are read as the document states them: the human's pass rule, whether
+it anticipates unseen robot turns and whether the robot sees its method choices (``[human]``,
+§3-§4), where and how the robot may inform, announce or ask and whether the human asks
+(``[communication]``, §5), and the objective the values are under (``[objective]``, §7). Both
+the worst-case and the expected value of every node are recomputed from the validator's own
+move costs.
+
+What the robot observes (§3): it sees the human's actions, never its methods, so a node holds
+the set A_H of human agendas that fit what it saw, and the human's options are grouped by label
+(one AND branch per label). The policy must be executable by a robot that sees only that: a
+robot node has one move, a human node never two moves with the same label (that would branch
+on a hidden choice), and each recorded edge leads to the node of the move it names, also when
+several robot moves share a label.
 """
 
 from __future__ import annotations
@@ -31,14 +39,18 @@ from typing import TypeVar
 
 from ..model.formula import And, Formula, StateFn, negate
 from ..model.grounding import FINISH, GMethod, GModel, GOp, Grounded, ground_problem
-from ..model.options import InformWhere, ObjectiveKind, Passes, Relevance, Speech
+from ..model.options import InformWhere, Intentions, ObjectiveKind, Passes, Relevance, Speech
 from ..model.problem import Problem
 from ..policy_format import Policy, PolicyMove, PolicyNode
 
 ROBOT, HUMAN = 0, 1
 ACTION, WAIT, PASS, INFORM, ASK = "action", "wait", "pass", "inform", "ask"
+ANSWER, ANNOUNCE = "answer", "announce"  # the human's answer to the robot's ask; §5
 SILENCE = "silence"  # the robot's silent move at a speech opening (section 5)
+COMMUNICATIONS = (INFORM, ASK, ANNOUNCE)  # the moves counted as communications (§5)
 BLOCKED = -2  # the end of a human plan where no action applies (relevance "plan", section 5)
+NOT_DONE = -3  # §5: what a blocked, unfinished robot agenda offers: "the robot is not done"
+INTENTION = "ask(intention)"  # the robot's question (robot_asks, §5)
 
 
 @dataclass(frozen=True)
@@ -81,19 +93,21 @@ class Report:
 
 @dataclass(frozen=True)
 class EState:
-    """A search node of section 3: (turn, T, robot agenda, human agenda, W, k, passive), with,
-    at a human node, whether the robot's last move was a forced wait (section 4) and, at the
-    initial robot node of a speech opening, that it is one (section 5)."""
+    """A search node of section 3: (turn, T, robot agenda, the human agendas A_H the robot
+    cannot tell apart, W, k, passive), with, at a human node, whether the robot's last move was
+    a forced wait (section 4) and whether the human is answering the robot's question (§5),
+    and, at the initial robot node of a speech opening, that it is one (section 5)."""
 
     turn: int
     true: int
     robot: Agenda
-    human: Agenda
+    humans: frozenset[Agenda]  # A_H, never empty (§3)
     worlds: Worlds
     k: int
     passive: int
     forced: bool = False
     opening: bool = False
+    answering: bool = False
 
 
 @dataclass(frozen=True)
@@ -642,8 +656,9 @@ class _Semantics:
             return worlds
         return frozenset((s, ()) for s, _ in worlds)
 
-    def advance(self, es: EState, kind: str, true: int, robot: Agenda, human: Agenda,
-                worlds: Worlds, k: int, forced: bool = False) -> EState:
+    def advance(self, es: EState, kind: str, true: int, robot: Agenda,
+                humans: frozenset[Agenda], worlds: Worlds, k: int,
+                forced: bool = False) -> EState:
         """§3-§4: the node after a move: SA, k reset when co-present, the passive count."""
         worlds = self.sees_robot_done(self.sa(worlds, true), true, robot)
         if self.cop(true):
@@ -651,7 +666,7 @@ class _Semantics:
         passive = es.passive + 1 if kind in (WAIT, PASS) else 0
         if es.opening:  # §5: the opening gives the turn to the human, no passive move counted
             passive = es.passive
-        return EState(1 - es.turn, true, robot, human, worlds, k, passive, forced)
+        return EState(1 - es.turn, true, robot, humans, worlds, k, passive, forced)
 
     def initial(self) -> EState:
         """§1-§3 and §5: the initial node; a robot opening turn when the human starts, the
@@ -662,10 +677,10 @@ class _Semantics:
         # situation assessment runs on the initial state too ("whenever", section 4)
         worlds = self.sees_robot_done(worlds, g.init, g.robot_agenda)
         turn = ROBOT if self.p.starts == "robot" else HUMAN
-        es = EState(turn, g.init, g.robot_agenda, g.human_agenda, worlds, 0, 0)
+        es = EState(turn, g.init, g.robot_agenda, frozenset({g.human_agenda}), worlds, 0, 0)
         if turn == HUMAN and self.p.communication.speech == Speech.WITH_ACTION:
             opening = replace(es, turn=ROBOT, opening=True)
-            if not isinstance(self.inform_search(opening), str):
+            if not isinstance(self.inform_found(opening), str):
                 return opening
         return es
 
@@ -697,7 +712,7 @@ class _Semantics:
             worlds = self.set_inferable(frozenset(seen), es.true, t2)
         else:
             worlds, k = self.product(es.worlds), k + 1
-        after = self.advance(es, ACTION, t2, rest, es.human, worlds, k)
+        after = self.advance(es, ACTION, t2, rest, es.humans, worlds, k)
         name = g.task_names[a]
         return Step(ROBOT, ACTION, name, self.action_cost(ROBOT, op), after, act=name)
 
@@ -708,12 +723,12 @@ class _Semantics:
         if not self.cop(es.true) and k < self.K:  # an unseen wait is an imagined event
             worlds, k = self.product(worlds), k + 1
         forced = self.p.human.passes == Passes.PROTOTYPE or not self.robot_actions(es)
-        after = self.advance(es, WAIT, es.true, es.robot, es.human, worlds, k, forced)
+        after = self.advance(es, WAIT, es.true, es.robot, es.humans, worlds, k, forced)
         return Step(ROBOT, WAIT, "wait", _frac(self.p.costs.wait), after, act="wait")
 
     def silence(self, es: EState) -> Step:
         """§5: the robot's silent move at a speech opening (cost 0, no effect)."""
-        after = self.advance(es, SILENCE, es.true, es.robot, es.human, es.worlds, es.k)
+        after = self.advance(es, SILENCE, es.true, es.robot, es.humans, es.worlds, es.k)
         return Step(ROBOT, SILENCE, SILENCE, Fraction(0), after)
 
     def literals(self, t: int, units: Iterable[int]) -> tuple[str, ...]:
@@ -724,22 +739,82 @@ class _Semantics:
         variable, a counter), nothing else is witnessed (k unchanged, no world multiplied,
         also while apart)."""
         worlds = self.tell(es.worlds, es.true, units)
-        after = self.advance(es, INFORM, es.true, es.robot, es.human, worlds, es.k)
+        after = self.advance(es, INFORM, es.true, es.robot, es.humans, worlds, es.k)
         label = f"inform({', '.join(self.literals(es.true, sorted(units)))})"
         return Step(ROBOT, INFORM, label, _frac(self.p.costs.inform), after)
 
-    def informed(self, es: EState, units: Sequence[int]) -> EState:
-        """The node as it is once the human has heard ``inform(units)``, before the action
-        said with it runs (speech "with-action", section 5)."""
-        return replace(es, worlds=self.tell(es.worlds, es.true, units))
-
-    def with_speech(self, es: EState, units: Sequence[int], st: Step) -> Step:
-        """§5: ``inform(A) + a``: A is heard first, then ``st`` (computed from the informed
-        node) runs as usual; the costs add up."""
-        told = self.literals(es.true, units)
+    def with_speech(self, units: Sequence[int], st: Step) -> Step:
+        """§5: ``inform(A) + a``: said with the action (or wait) ``st`` and judged on the node
+        it leads to: the human learns the values A has in the true state after ``st`` (T'), in
+        its worlds after ``st``; the costs add up."""
+        assert st.after is not None
+        after = st.after
+        told = self.literals(after.true, units)
         label = f"inform({', '.join(told)}) + {st.act}"
-        return Step(ROBOT, st.kind, label, _frac(self.p.costs.inform) + st.cost, st.after,
+        heard = replace(after, worlds=self.tell(after.worlds, after.true, units))
+        return Step(ROBOT, st.kind, label, _frac(self.p.costs.inform) + st.cost, heard,
                     act=st.act, told=told)
+
+    def talk_where(self, es: EState, what: str) -> str | None:
+        """§5: why the robot may not talk (``what``: inform, ask, announce) here for where the
+        agents are (None if it may): while co-present, or anywhere under ``inform =
+        "anywhere"``."""
+        if self.cop(es.true) or self.p.communication.inform == InformWhere.ANYWHERE:
+            return None
+        return f"{what} is offered only while co-present"
+
+    def robot_ask(self, es: EState) -> Step | str:
+        """§5 (``robot_asks``): the robot asks the human what it is about to do, when more than
+        one human agenda fits what it saw; the human answers at once (an answering node: same
+        T, W, robot agenda and k, no passive move)."""
+        if not self.p.communication.robot_asks:
+            return "the robot asks the human's intention only under [communication] " \
+                   "robot_asks = true (§5)"
+        if len(es.humans) < 2:
+            return "only one human agenda fits what the robot saw: there is nothing to ask (§5)"
+        why = self.talk_where(es, "asking")
+        if why is not None:
+            return why
+        after = replace(es, turn=HUMAN, passive=0, forced=False, answering=True)
+        return Step(ROBOT, ASK, INTENTION, _frac(self.p.costs.ask), after)
+
+    def answers(self, es: EState) -> list[Step]:
+        """§5: at an answering node the human tells which agenda it follows (cost 0, no turn
+        spent): then it is the human's turn, with that one agenda."""
+        out = []
+        for h in self.ordered(es.humans):
+            after = replace(es, answering=False, humans=frozenset({h}))
+            out.append(Step(HUMAN, ANSWER, f"answer({', '.join(self.shown(h))})", Fraction(0),
+                            after))
+        return out
+
+    def announce(self, es: EState) -> Step | str:
+        """§5 (``announce``): the robot tells its own agenda: the worlds whose attributed robot
+        agenda is the announced one stay; if none, every world's agenda becomes it. Offered
+        where the robot options the human expects differ from the robot's real ones (read per
+        world) and the announcement changes the worlds."""
+        if not self.p.communication.announce:
+            return "the robot announces its agenda only under [communication] announce = " \
+                   "true (§5)"
+        why = self.talk_where(es, "announce")
+        if why is not None:
+            return why
+        if self.robot_view(es.worlds) == self.true_robot_view(es):
+            return "the robot options the human expects equal the robot's real ones: the " \
+                   "divergence is not relevant (§5)"
+        mine = self.attributed(es.robot)
+        worlds = frozenset(w for w in es.worlds if w[1] == mine)
+        if not worlds:
+            worlds = frozenset((s, mine) for s, _ in es.worlds)
+        if worlds == es.worlds:
+            return "announcing changes none of the human's worlds (§5)"
+        after = self.advance(es, ANNOUNCE, es.true, es.robot, es.humans, worlds, es.k)
+        label = f"announce({', '.join(self.shown(es.robot))})"
+        return Step(ROBOT, ANNOUNCE, label, _frac(self.p.costs.inform), after)
+
+    def ordered(self, humans: Iterable[Agenda]) -> list[Agenda]:
+        """The human agendas in the order of their names (a fixed order to go through A_H)."""
+        return sorted(humans, key=self.shown)
 
     def conjuncts(self, conds: Sequence[Formula], states: frozenset[int]) -> list[Formula]:
         """The conjuncts of the uncertain conditions whose value differs between worlds."""
@@ -757,57 +832,96 @@ class _Semantics:
         return self.g.display.get(f, str(f))
 
     def human_options(self, es: EState) -> list[Step]:
-        """§4 (Human): certain actions, asks while co-present (unless ``[communication] ask =
-        false``), and pass by the pass rule (forced waits, ``passes_when_blocked``)."""
+        """§4 (Human): the options of every hypothesis of A_H (certain actions, asks while
+        co-present unless ``[communication] ask = false``, pass by the pass rule), grouped by
+        label (§3-§4): one branch per action label, whose node keeps every way any hypothesis
+        goes on after it; one per question, and one pass, keeping the hypotheses that had it.
+        Under ``intentions = "visible"`` one branch per refinement, labels that would repeat
+        at the node naming the intention: ``grab(c1) [place_l(c1)]``. At an answering node,
+        the answers (§5)."""
+        if es.answering:
+            return self.answers(es)
         g = self.g
         states = frozenset(s for s, _ in es.worlds)
-        results = self.hrefine(es.human, states)
         cop = self.cop(es.true)
+        acts: dict[int, list[Agenda]] = {}  # action -> every rest after it, in order found
+        branches: list[tuple[int, Agenda]] = []  # (action, rest), each refinement once
+        asks: dict[frozenset[Formula], tuple[list[Formula], list[Agenda]]] = {}
+        passers: list[Agenda] = []
+        for h in self.ordered(es.humans):
+            results = self.hrefine(h, states)
+            certain = _dedupe((r.action, r.rest) for r in results
+                              if r.states == states and r.action != FINISH)
+            for a, rest in certain:
+                acts.setdefault(a, [])
+                if rest not in acts[a]:
+                    acts[a].append(rest)
+                if (a, rest) not in branches:
+                    branches.append((a, rest))
+            mine: list[frozenset[Formula]] = []
+            if cop and self.p.communication.ask:
+                for r in results:
+                    if r.states == states:
+                        continue
+                    phi = self.conjuncts(r.conds, states)
+                    key = frozenset(phi)
+                    if not phi or key in mine:
+                        continue
+                    mine.append(key)
+                    asks.setdefault(key, (phi, []))[1].append(h)
+            if self.may_pass(es, bool(certain), bool(mine), cop):
+                passers.append(h)
         steps: list[Step] = []
-        certain = _dedupe((r.action, r.rest) for r in results
-                          if r.states == states and r.action != FINISH)
-        for a, rest in certain:
-            op = g.human.ops[a]
-            cost = self.action_cost(HUMAN, op)
-            name = g.task_names[a]
-            if not op.pre(es.true):
-                steps.append(Step(HUMAN, ACTION, name, cost, None, act=name))
-                continue
-            t2 = op.apply(es.true)
-            worlds = frozenset((op.apply(s), ag) for s, ag in es.worlds)
-            worlds = self.set_inferable(worlds, es.true, t2)
-            after = self.advance(es, ACTION, t2, es.robot, rest, worlds, es.k)
-            steps.append(Step(HUMAN, ACTION, name, cost, after, act=name))
-        asks: list[frozenset[Formula]] = []
-        if cop and self.p.communication.ask:
-            for r in results:
-                if r.states == states:
-                    continue
-                phi = self.conjuncts(r.conds, states)
-                key = frozenset(phi)
-                if not phi or key in asks:
-                    continue
-                asks.append(key)
-                fns = [g.compile(f) for f in phi]
-                want = all(fn(es.true) for fn in fns)
-                # the robot answers truthfully: drop the worlds where phi differs from T
-                worlds = frozenset(w for w in es.worlds
-                                   if all(fn(w[0]) for fn in fns) == want)
-                texts = tuple(self.text(f) for f in phi)
-                after = self.advance(es, ASK, es.true, es.robot, es.human, worlds, es.k)
-                steps.append(Step(HUMAN, ASK, f"ask({' and '.join(texts)})",
-                                  _frac(self.p.costs.ask), after, texts))
-        if cop:
-            # right after a forced robot wait, a human with a certain action does not idle
-            may_pass = not (es.forced and certain)
-            if es.forced and asks and not self.p.human.passes_when_blocked:
-                may_pass = False  # a blocked human asks rather than waiting silently
+        if self.p.human.intentions == Intentions.VISIBLE:
+            for a, rest in branches:
+                label = g.task_names[a]
+                if len(acts[a]) > 1:
+                    label = f"{label} [{', '.join(self.shown(rest))}]"
+                steps.append(self.human_act(es, a, [rest], label))
         else:
-            may_pass = not certain
-        if may_pass:
-            after = self.advance(es, PASS, es.true, es.robot, es.human, es.worlds, es.k)
+            steps.extend(self.human_act(es, a, rests, g.task_names[a])
+                         for a, rests in acts.items())
+        for phi, hyps in asks.values():
+            fns = [g.compile(f) for f in phi]
+            want = all(fn(es.true) for fn in fns)
+            # the robot answers truthfully: drop the worlds where phi differs from T
+            worlds = frozenset(w for w in es.worlds if all(fn(w[0]) for fn in fns) == want)
+            texts = tuple(self.text(f) for f in phi)
+            after = self.advance(es, ASK, es.true, es.robot, frozenset(hyps), worlds, es.k)
+            steps.append(Step(HUMAN, ASK, f"ask({' and '.join(texts)})",
+                              _frac(self.p.costs.ask), after, texts))
+        if passers:
+            after = self.advance(es, PASS, es.true, es.robot, frozenset(passers), es.worlds,
+                                 es.k)
             steps.append(Step(HUMAN, PASS, "pass", _frac(self.p.costs.pass_), after, act="pass"))
         return steps
+
+    def human_act(self, es: EState, a: int, rests: Sequence[Agenda], label: str) -> Step:
+        """§4: the human does ``a``; the robot, seeing it, keeps every agenda in ``rests``.
+        None (the branch fails) when ``a`` is not applicable in T (a false belief)."""
+        g = self.g
+        op = g.human.ops[a]
+        cost = self.action_cost(HUMAN, op)
+        name = g.task_names[a]
+        if not op.pre(es.true):
+            return Step(HUMAN, ACTION, label, cost, None, act=name)
+        t2 = op.apply(es.true)
+        worlds = frozenset((op.apply(s), ag) for s, ag in es.worlds)
+        worlds = self.set_inferable(worlds, es.true, t2)
+        after = self.advance(es, ACTION, t2, es.robot, frozenset(rests), worlds, es.k)
+        return Step(HUMAN, ACTION, label, cost, after, act=name)
+
+    def may_pass(self, es: EState, certain: bool, asks: bool, cop: bool) -> bool:
+        """§4: whether a human (one hypothesis) with a certain action or not, and a question
+        to ask or not, may pass here."""
+        if self.p.human.passes == Passes.IDLE:
+            return not certain and not asks  # only with nothing it could do
+        if not cop:
+            return not certain  # while away, only with nothing else to do
+        if es.forced and certain:
+            return False  # right after a forced robot wait, a human that can act does not idle
+        # a blocked human asks rather than waiting silently, unless it passes when blocked
+        return not (es.forced and asks and not self.p.human.passes_when_blocked)
 
     # -- section 5: relevance of a divergence, the informing set -------------------------------
 
@@ -844,35 +958,64 @@ class _Semantics:
 
         return go(agenda, s, self.p.communication.plan_horizon)
 
-    def views_differ(self, es: EState, worlds: Worlds) -> tuple[bool, bool, bool]:
+    def robot_view(self, worlds: Worlds) -> frozenset[int]:
+        """§5: the robot options the human expects, read per world: the first actions of the
+        attributed agenda under each world's state with M_R^H (FINISH when it can finish); a
+        world whose agenda is unfinished and offers no option contributes NOT_DONE."""
+        out: set[int] = set()
+        for s, tn in worlds:
+            ops = {a for a, _ in self.refine(self.g.robot_seen_by_human, tn, s)}
+            out |= ops or {NOT_DONE}
+        return frozenset(out)
+
+    def true_robot_view(self, es: EState) -> frozenset[int]:
+        """§5: the robot's real options: the first actions of its agenda under T with M_R
+        (FINISH when it can finish), or NOT_DONE when it is unfinished and blocked."""
+        ops = frozenset(a for a, _ in self.refine(self.g.robot, es.robot, es.true))
+        return ops or frozenset({NOT_DONE})
+
+    def views_differ(self, es: EState, worlds: Worlds, plan: bool) -> tuple[bool, bool, bool]:
         """(human's options differ, anticipated robot options differ, human plans differ)
-        between W and T; the third is always False under relevance "next"."""
+        between W and T, the human's for some hypothesis of A_H (§5); the third only when
+        ``plan`` (relevance "plan")."""
         states = frozenset(s for s, _ in worlds)
-        human = self.human_view(es.human, states) != self.human_view(es.human,
-                                                                     frozenset({es.true}))
+        truth = frozenset({es.true})
+        human = any(self.human_view(h, states) != self.human_view(h, truth) for h in es.humans)
         # the robot's options include being done (FINISH): a divergence that hides from the
         # human that the robot has finished is relevant, since the goal needs H to believe it
-        expected = {a for s, tn in worlds
-                    for a, _ in self.refine(self.g.robot_seen_by_human, tn, s)}
-        real = {a for a, _ in self.refine(self.g.robot, es.robot, es.true)}
-        plans = False
-        if self.p.communication.relevance == Relevance.PLAN:
-            mine = self.plans(es.human, es.true)
-            plans = any(self.plans(es.human, s) != mine for s in states)
-        return human, expected != real, plans
+        robot = self.robot_view(worlds) != self.true_robot_view(es)
+        plans = plan and any(self.plans(h, s) != self.plans(h, es.true)
+                             for h in es.humans for s in states)
+        return human, robot, plans
 
     def inform_where(self, es: EState) -> str | None:
         """§5: why no ``inform`` may be offered here for where the agents are (None if it
         may). Under ``inform = "anywhere"`` an inform is heard while apart even at k = K: it
         is no robot turn the human imagines (no world multiplied, k unchanged), so the K bound
         of section 4, which limits what the robot does unseen, does not apply to it."""
-        if self.cop(es.true) or self.p.communication.inform == InformWhere.ANYWHERE:
-            return None
-        return "inform is offered only while co-present"
+        return self.talk_where(es, "inform")
 
-    def inform_search(self, es: EState) -> tuple[str, int, list[tuple[int, ...]]] | str:
-        """§5: the informing sets allowed here: (what they fix, their size, every smallest set
-        that fixes it, in canonical order), or why no ``inform`` is offered.
+    def inform_found(self, es: EState) -> list[tuple[str, int, list[tuple[int, ...]], bool]] | str:
+        """§5: the informing searches that find sets here, or why no ``inform`` is offered.
+        Under relevance "plan", the sets fixing the plans and, beside them, the sets that fix
+        the next step as under "next": "plan" never offers less than "next"."""
+        plan = self.p.communication.relevance == Relevance.PLAN
+        first = self.inform_search(es, plan)
+        found = [] if isinstance(first, str) else [(*first, plan)]
+        if plan:
+            nxt = self.inform_search(es, False)
+            if not isinstance(nxt, str):
+                found.append((*nxt, False))
+        if not found:
+            assert isinstance(first, str)
+            return first
+        return found
+
+    def inform_search(self, es: EState, plan: bool
+                      ) -> tuple[str, int, list[tuple[int, ...]]] | str:
+        """§5: the informing sets of one relevance reading (``plan``: relevance "plan", else
+        "next"): (what they fix, their size, every smallest set that fixes it, in canonical
+        order), or why no such ``inform`` is offered.
 
         Sets fixing the human's options, the anticipated robot options (and, under relevance
         "plan", the plans) come first; failing those, sets fixing the human's options (and the
@@ -881,8 +1024,7 @@ class _Semantics:
         why = self.inform_where(es)
         if why is not None:
             return why
-        plan = self.p.communication.relevance == Relevance.PLAN
-        now = self.views_differ(es, es.worlds)
+        now = self.views_differ(es, es.worlds, plan)
         if not any(now):
             return ("the divergence is not relevant (the human's and the anticipated robot's "
                     "options" + (" and the human's plans" if plan else "") +
@@ -895,7 +1037,7 @@ class _Semantics:
         fixed: dict[tuple[int, ...], tuple[bool, bool, bool]] = {}
         for n in range(1, limit + 1):
             for sub in itertools.combinations(cands, n):
-                h, r, p = self.views_differ(es, self.tell(es.worlds, es.true, sub))
+                h, r, p = self.views_differ(es, self.tell(es.worlds, es.true, sub), plan)
                 fixed[sub] = (not h, not r, not p)
         both = "the human's views" + (" and plans" if plan else "")
         alone = "the human's options" + (" and plans" if plan else "")
@@ -914,7 +1056,7 @@ class _Semantics:
 
     def check_inform(self, es: EState, atoms: Sequence[int]) -> str | None:
         """§5: why ``inform(atoms)`` (units, as masks) is not a legal robot option here (None
-        when it is)."""
+        when it is): it must be the set one of the informing searches chooses."""
         why = self.inform_where(es)
         if why is not None:
             return why
@@ -926,16 +1068,17 @@ class _Semantics:
                 return (f"every world already agrees with the truth on {self.unit_name(u)}: "
                         "informing the human of what it believes is never generated")
         limit = self.p.communication.inform_max_atoms
-        found = self.inform_search(es)
+        found = self.inform_found(es)
         if isinstance(found, str):
             return found
         if len(atoms) > limit:
             return f"informs {len(atoms)} atoms, more than inform_max_atoms = {limit}"
-        what, n, sets = found
         mine = tuple(sorted(atoms))
-        if mine in sets:
-            return self.check_choice(es, mine, sets)
-        h, r, p = self.views_differ(es, self.tell(es.worlds, es.true, mine))
+        choices = [self.check_choice(es, mine, sets) for _, _, sets, _ in found if mine in sets]
+        if choices:
+            return None if None in choices else choices[0]
+        what, n, _, plan = found[0]
+        h, r, p = self.views_differ(es, self.tell(es.worlds, es.true, mine), plan)
         fixes = (not h and not p) if what.startswith("the human's options") else not (h or r or p)
         if not fixes:
             return f"it does not fix {what}, yet a set of {n} atom(s) does"
@@ -967,12 +1110,16 @@ class _Semantics:
             return False
         if (FINISH, ()) not in self.refine(g.robot, es.robot, es.true):
             return False
-        states = frozenset(s for s, _ in es.worlds)
-        if not any(r.action == FINISH and r.states == states
-                   for r in self.hrefine(es.human, states)):
-            return False
+        if not all(self.human_done(h, es.worlds) for h in es.humans):
+            return False  # §6: every hypothesis finished, or the robot cannot know it done
         return all((FINISH, ()) in self.refine(g.robot_seen_by_human, tn, s)
                    for s, tn in es.worlds)
+
+    def human_done(self, agenda: Agenda, worlds: Worlds) -> bool:
+        """§6: the human's agenda finishes in every world (H believes its task done)."""
+        states = frozenset(s for s, _ in worlds)
+        return any(r.action == FINISH and r.states == states
+                   for r in self.hrefine(agenda, states))
 
     # -- reading labels ------------------------------------------------------------------------
 
@@ -1017,9 +1164,11 @@ def _differences(a: EState, b: EState, sem: _Semantics) -> str:
         out.append(f"{sem.names[a.turn]} moved next then, {sem.names[b.turn]} now")
     if a.true != b.true:
         out.append("the true state T differs on " + ", ".join(g.mask_atoms(a.true ^ b.true)))
-    for what, x, y in (("robot agenda", a.robot, b.robot), ("human agenda", a.human, b.human)):
-        if x != y:
-            out.append(f"the {what} is {sem.shown(x)} then, {sem.shown(y)} now")
+    if a.robot != b.robot:
+        out.append(f"the robot agenda is {sem.shown(a.robot)} then, {sem.shown(b.robot)} now")
+    if a.humans != b.humans:
+        out.append(f"the human agendas are {[sem.shown(h) for h in sem.ordered(a.humans)]} "
+                   f"then, {[sem.shown(h) for h in sem.ordered(b.humans)]} now")
     if a.worlds != b.worlds:
         out.append(f"the human's worlds differ ({len(a.worlds)} then, {len(b.worlds)} now)")
     for what, i, j in (("k", a.k, b.k), ("the passive count", a.passive, b.passive)):
@@ -1029,6 +1178,8 @@ def _differences(a: EState, b: EState, sem: _Semantics) -> str:
         out.append("the robot's last wait was forced on one path only (section 4)")
     if a.opening != b.opening:
         out.append("it is the speech opening on one path only (section 5)")
+    if a.answering != b.answering:
+        out.append("the human answers the robot's question on one path only (§5)")
     return "; ".join(out)
 
 
@@ -1101,21 +1252,38 @@ class _Validator:
                 return 'speaking while acting needs [communication] speech = "with-action" ' \
                        '(section 5)'
             said, _, act = label.partition(" + ")
-            if act.startswith("inform(") or act == SILENCE:
+            if act.startswith(("inform(", "ask(", "announce(")) or act == SILENCE:
                 return f"{act} cannot be said with an inform; only an action or wait can"
-            r = self.inform_atoms(es, said)
-            if isinstance(r, str):
-                return r
-            steps = self.robot_steps(sem.informed(es, r), act)
+            steps = self.robot_steps(es, act)
             if isinstance(steps, str):
                 return steps
-            return [sem.with_speech(es, r, st) for st in steps]
+            # §5: what is said with a move is judged on the node the move leads to (the
+            # human's next decision), with the values of the true state after it
+            out: list[Step] = []
+            why = ""
+            for st in steps:
+                assert st.after is not None  # robot moves never fail
+                r = self.inform_atoms(st.after, said, f" after {act} (§5, with-action)")
+                if isinstance(r, str):
+                    why = why or r
+                else:
+                    out.append(sem.with_speech(r, st))
+            return out or why
         if label == "wait":
             return [sem.robot_wait(es)]
         if label.startswith("inform("):
             r = self.inform_atoms(es, label)
             return r if isinstance(r, str) else [sem.inform(es, r)]
-        if label == "pass" or label.startswith("ask("):
+        if label == INTENTION:
+            asked = sem.robot_ask(es)
+            return asked if isinstance(asked, str) else [asked]
+        if label.startswith("announce("):
+            want = f"announce({', '.join(sem.shown(es.robot))})"
+            if label != want:
+                return f"the robot may announce only its own agenda, {want} (§5)"
+            said_it = sem.announce(es)
+            return said_it if isinstance(said_it, str) else [said_it]
+        if label == "pass" or label.startswith(("ask(", "answer(")):
             return f"{label} is not a robot move"
         opts = [(a, r) for a, r in sem.robot_actions(es) if g.task_names[a] == label]
         if opts:
@@ -1135,9 +1303,10 @@ class _Validator:
         return f"{label} is not the first action of any refinement of the robot agenda " \
                f"{agenda} under T"
 
-    def inform_atoms(self, es: EState, label: str) -> list[int] | str:
+    def inform_atoms(self, es: EState, label: str, when: str = "") -> list[int] | str:
         """The units of ``inform(...)`` (atoms, state variables, counters, as masks) in label
-        order, if it is a legal inform here (§5)."""
+        order, if it is a legal inform at ``es`` (§5; ``when`` says which state the label's
+        values are read in, in messages: T, or T after the action it is said with)."""
         sem = self.sem
         parsed = sem.parse_inform(label)
         if isinstance(parsed, str):
@@ -1152,13 +1321,13 @@ class _Validator:
             truth = sem.say(es.true, u)
             if said != truth:
                 if u in sem.g.unit_names:
-                    return f"the label tells {said}, but T has {truth}"
+                    return f"the label tells {said}, but T has {truth}{when}"
                 value = not said.startswith("not ")
                 name = said[4:] if not value else said
                 return f"the label tells {name} is {str(value).lower()}, but it is " \
-                       f"{str(not value).lower()} in T"
+                       f"{str(not value).lower()} in T{when}"
         why = sem.check_inform(es, units)
-        return why if why is not None else units
+        return units if why is None else why + when
 
     def human_steps(self, es: EState, label: str,
                     options: list[Step] | None = None) -> list[Step]:
@@ -1183,7 +1352,16 @@ class _Validator:
             bad.append(f"state differs from the true state T (recorded but false: {extra}; "
                        f"true but not recorded: {missing})")
         cmp("robot_agenda", list(node.robot_agenda), sem.shown(es.robot))
-        cmp("human_agenda", list(node.human_agenda), sem.shown(es.human))
+        want_h = sorted(sem.shown(h) for h in es.humans)
+        got_h = sorted(list(h) for h in node.human_agendas)
+        if len(want_h) == 1 and len(got_h) == 1:
+            cmp("human_agenda", list(node.human_agenda), want_h[0])
+        elif got_h != want_h:
+            bad.append(f"hypotheses (the human agendas the robot cannot tell apart, §3) are "
+                       f"{got_h}, expected {want_h}")
+        if len(node.hypotheses) > 1 and list(node.human_agenda) != list(node.hypotheses[0]):
+            bad.append(f"human_agenda is {list(node.human_agenda)}, but a node with hypotheses "
+                       f"records the first of them, {list(node.hypotheses[0])}")
         cmp("copresent", node.copresent, sem.cop(es.true))
         cmp("k", node.k, es.k)
         cmp("worlds", node.worlds, len(es.worlds))
@@ -1191,7 +1369,7 @@ class _Validator:
         if (node.id == 0 and not self.policy.after and es.turn == HUMAN and not goal
                 and node.to_move == self.name(ROBOT)
                 and self.problem.communication.speech == Speech.WITH_ACTION):
-            why = sem.inform_search(replace(es, turn=ROBOT, opening=True))
+            why = sem.inform_found(replace(es, turn=ROBOT, opening=True))
             if isinstance(why, str):  # the robot may not open: say why (section 5)
                 bad.append(f"no speech opening, since no informing set exists in the initial "
                            f"state: {why}")
@@ -1434,10 +1612,10 @@ class _Validator:
             return "the goal formula does not hold in T"
         if (FINISH, ()) not in sem.refine(g.robot, es.robot, es.true):
             return "the robot's agenda cannot finish under T"
-        states = frozenset(s for s, _ in es.worlds)
-        if not any(r.action == FINISH and r.states == states
-                   for r in sem.hrefine(es.human, states)):
-            return "the human's agenda does not certainly finish over W"
+        for h in sem.ordered(es.humans):
+            if not sem.human_done(h, es.worlds):
+                which = f" {sem.shown(h)}" if len(es.humans) > 1 else ""
+                return f"the human's agenda{which} does not certainly finish over W"
         return "in some world the robot agenda the human attributes to the robot cannot finish"
 
     def check_move(self, node: PolicyNode, j: int, st: Step, path: list[str]) -> bool:
@@ -1485,7 +1663,8 @@ class _Validator:
             return INFORM, [said for _, said in parsed]
         if st.kind == ASK:
             return ASK, [st.label[len("ask("):-1]]
-        return st.kind, []  # wait, pass, silence (also a wait said with an inform)
+        # wait, pass, silence (also a wait said with an inform), answer, announce
+        return st.kind, []
 
     def robot_node(self, node: PolicyNode, es: EState, path: list[str],
                    where: str) -> list[tuple[int, Step]]:
@@ -1504,16 +1683,65 @@ class _Validator:
                       f"(section 4): {r}")
             self.end(node.id)
             return []
-        # one action may arise from several refinements: the recorded agenda tells which
-        st = next((s for s in r if s.after is not None
-                   and self.sem.shown(s.after.robot) == child.robot_agenda), r[0])
+        st = self.recorded(child, r)
+        if st is None:
+            # §4: one label, several moves (robot methods starting with the same action):
+            # the recorded edge must lead to the node of one of them
+            sem = self.sem
+            ways = [(sem.shown(s.after.robot), sorted(sem.shown(h) for h in s.after.humans))
+                    for s in r if s.after is not None]
+            self.fail(cpath, f"node {child.id} (R {move.action}): the recorded edge is none of "
+                      f"the {len(r)} robot moves labelled {move.action} here (§4): its node "
+                      f"has robot agenda {child.robot_agenda} and human agendas "
+                      f"{sorted(child.human_agendas)}; the moves lead to (robot agenda, human "
+                      f"agendas) {ways}")
+            self.end(node.id)
+            return []
         if not self.check_move(node, 0, st, path):
             self.end(node.id)
             return []
         return [(0, st)]
 
+    def recorded(self, child: PolicyNode, steps: list[Step]) -> Step | None:
+        """The move of ``steps`` (several moves one label denotes) whose node is ``child``:
+        the one the recorded edge names. Matched on the agendas (the robot's, and the human
+        agendas A_H), then on every recorded fact; None when several moves share the label
+        and none has the child's agendas (a lone move is checked by its child's facts)."""
+        sem = self.sem
+        if len(steps) == 1:
+            return steps[0]
+        want = sorted(list(h) for h in child.human_agendas)
+        fits = [s for s in steps if s.after is not None
+                and sem.shown(s.after.robot) == list(child.robot_agenda)
+                and sorted(sem.shown(h) for h in s.after.humans) == want]
+        if not fits:
+            return None
+        return next((s for s in fits if s.after is not None
+                     and not self.facts(child, s.after, sem.is_goal(s.after))), fits[0])
+
+    def hidden_choice(self, node: PolicyNode, path: list[str], where: str) -> bool:
+        """§3: whether two human moves at ``node`` share a label (compared without spaces): the
+        robot cannot tell them apart, so the policy would branch on a choice it cannot see."""
+        first: dict[str, PolicyMove] = {}
+        for move in node.moves:
+            key = "".join(move.action.split())
+            seen = first.setdefault(key, move)
+            if seen is move:
+                continue
+            visible = self.problem.human.intentions == Intentions.VISIBLE
+            self.fail(path, f"{where}: two human branches have the label {move.action} (to "
+                      f"nodes {seen.to} and {move.to}): the robot sees the same move in both, "
+                      "so the policy branches on a hidden choice (§3"
+                      + (', under intentions = "visible" a repeated action label names the '
+                         'intention: grab(c1) [rest]' if visible else "") + ")")
+            self.end(node.id)
+            return True
+        return False
+
     def human_node(self, node: PolicyNode, es: EState, path: list[str],
                    where: str) -> list[tuple[int, Step]]:
+        if self.hidden_choice(node, path, where):
+            return []
         options = self.sem.human_options(es)
         used: list[Step] = []
         out: list[tuple[int, Step]] = []
@@ -1527,11 +1755,7 @@ class _Validator:
                           f"{[o.label for o in options]}")
                 self.end(node.id)
                 continue
-            st = next((m for m in matches if m.after is not None
-                       and self.sem.shown(m.after.human) == child.human_agenda
-                       and m not in used), None)
-            if st is None:
-                st = next((m for m in matches if m not in used), matches[0])
+            st = next((m for m in matches if m not in used), matches[0])
             if st in used:
                 self.fail(cpath, f"node {child.id} (H {move.action}): duplicate human "
                           "branch: this option is already covered")
@@ -1645,14 +1869,14 @@ class _Validator:
         for n in reversed(order):  # parents first
             for m in nodes[n].moves:
                 reach[m.to] += reach[n]
-                if m.kind in (INFORM, ASK) or m.told:
+                if m.kind in COMMUNICATIONS or m.told:
                     comms += reach[n]
             if not nodes[n].moves:
                 leaves += reach[n]
         if pol.communications != comms:
             self.fail([], f"communications is {pol.communications}, but the policy has "
-                      f"{comms} inform/ask moves and moves said with an inform (counted in "
-                      "its tree unfolding)")
+                      f"{comms} inform/ask/announce moves and moves said with an inform "
+                      "(counted in its tree unfolding)")
         if pol.leaves != leaves:
             self.fail([], f"leaves is {pol.leaves}, but the policy has {leaves} leaves in its "
                       "tree unfolding (root-to-leaf branches)")
