@@ -93,10 +93,10 @@ class Report:
 
 @dataclass(frozen=True)
 class EState:
-    """A search node of section 3: (turn, T, robot agenda, the human agendas A_H the robot
-    cannot tell apart, W, k, passive), with, at a human node, whether the robot's last move was
-    a forced wait (section 4) and whether the human is answering the robot's question (§5),
-    and, at the initial robot node of a speech opening, that it is one (section 5)."""
+    """A search node of §3: (turn, T, robot agenda, the human agendas A_H the robot cannot
+    tell apart, W, k, passive), with, at a human node, whether the robot's last move was a
+    forced wait (§4) and whether the human is answering the robot's question (§5), and, at
+    the initial robot node of a speech opening, that it is one (§5)."""
 
     turn: int
     true: int
