@@ -1331,7 +1331,8 @@ class _Validator:
 
     def human_steps(self, es: EState, label: str,
                     options: list[Step] | None = None) -> list[Step]:
-        """The human options a label denotes (several when methods differ in what is left)."""
+        """The human option a label denotes (§4: labels are unique at a node; a question
+        matches in any order of its conjuncts)."""
         opts = options if options is not None else self.sem.human_options(es)
         return [o for o in opts if (_ask_matches(o, label) if o.kind == ASK else
                                     o.label == label)]
