@@ -315,22 +315,25 @@ class Semantics:
         forced = not acts or self.human_model.passes == Passes.PROTOTYPE
         waited = self.robot_wait(es, cop, forced)
         out.append(Move(ROBOT, WAIT, "wait", self.costs.wait, waited))
-        if not self.together(t):
-            return out
-        for mask in self.informing_sets(es):
-            out.append(Move(ROBOT, INFORM, self.inform_label(t, mask), self.costs.inform,
-                            self.inform(es, mask), atoms=mask))
         if self.comm.speech == Speech.WITH_ACTION:
             # §5: what is said with a move is judged on the state the move leads to (the
-            # human's next decision), and told as the truth is then
+            # human's next decision), told as the truth is then, and heard if the robot may
+            # inform there
             for m in out[:len(acts) + 1]:
                 assert m.child is not None
+                if not self.together(m.child.true):
+                    continue
                 for mask in self.informing_sets(m.child):
                     out.append(Move(ROBOT, m.kind, f"{self.inform_label(m.child.true, mask)} + "
                                     f"{m.label}", self.costs.inform + m.cost,
                                     self.inform(m.child._replace(turn=ROBOT), mask)._replace(
                                         passive=m.child.passive, forced=m.child.forced),
                                     m.op, atoms=mask))
+        if not self.together(t):
+            return out
+        for mask in self.informing_sets(es):
+            out.append(Move(ROBOT, INFORM, self.inform_label(t, mask), self.costs.inform,
+                            self.inform(es, mask), atoms=mask))
         if self.comm.announce:
             said = self.announce(es)
             if said is not None:
