@@ -379,12 +379,13 @@ def test_py_trees_module_builds_the_same_tree(tmp_path: Path) -> None:
     assert len(generated) > 5
 
 
-def test_answers_follow_moves_that_share_a_label() -> None:
+def test_a_large_policy_with_hidden_intentions_keeps_its_shape_and_a_shallow_module() -> None:
     # the 8-cube problem's human reaches move(mt, ot) by several methods (to fetch one cube or
-    # another): one label, several moves, each to its own node
+    # another): the robot sees one move, and the node after it holds several human agendas
     problem, policy = solved(ROOT / "tests" / "data" / "cubes-8.toml")
-    assert any(len({m.action for m in n.moves}) < len(n.moves) for n in policy.nodes)
-    bt.answers_of(problem, policy)  # walks every node with the move the policy meant
+    assert any(len(n.human_agendas) > 1 for n in policy.nodes)
+    assert all(len({m.action for m in n.moves}) == len(n.moves) for n in policy.nodes)
+    bt.answers_of(problem, policy)  # walks every node along the policy's edges
     forest = bt.from_policy(policy, bt.answers_of(problem, policy))
     assert xml_shape(bt.to_btcpp(forest)) == policy_shape(policy)
     # the py_trees module: one function per human choice keeps the nesting shallow

@@ -12,9 +12,14 @@ from pathlib import Path
 import pytest
 
 import ehatp
+from ehatp import Domain
 from ehatp.model.problem import Problem
 from ehatp.policy_format import Policy
+from ehatp.tools import bt
+from ehatp.tools.executor import Executor
 from ehatp.tools.walk import tick_py_trees, walk_policy
+
+from .scenarios import problem as scenario
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = sorted((ROOT / "examples").glob("**/*.toml"))
@@ -90,3 +95,78 @@ def test_a_problem_with_a_fixed_opening_walks_from_where_the_opening_ends() -> N
     assert report.ok and report.branches == policy.leaves
     other = dataclasses.replace(problem, after=())
     assert not walk_policy(other, policy).ok  # planned after the opening: it does not fit
+
+
+# -- moves that share a label ------------------------------------------------------------------
+
+
+def fetching() -> Problem:
+    """The robot tidies by one of two methods that both start with ``fetch``: ``piling`` (then
+    ``pile``, which needs what never holds) or ``shelving`` (then ``shelve``). After ``fetch``
+    the two moves lead to different nodes; only shelving's reaches the goal."""
+    d = Domain("fetching")
+    fetched, shelved = d.predicate("fetched"), d.predicate("shelved")
+    piled, steady = d.predicate("piled"), d.predicate("steady")
+    r = d.robot
+    fetch = r.action("fetch", pre=~fetched(), effects=[fetched()])
+    pile = r.action("pile", pre=fetched() & steady(), effects=[piled()])
+    shelve = r.action("shelve", pre=fetched(), effects=[shelved()])
+    tidy = r.task("tidy")
+    r.method(tidy, "piling", subtasks=[fetch(), pile()])
+    r.method(tidy, "shelving", subtasks=[fetch(), shelve()])
+    return scenario(d, init=[], robot=["tidy"], objects={}, starts="robot")
+
+
+def test_a_robot_move_that_shares_its_label_is_followed_along_the_policy_s_edge() -> None:
+    p = fetching()
+    result = ehatp.solve(p)
+    assert result.policy is not None
+    policy = result.policy
+    root = policy.root
+    (edge,) = root.moves
+    assert edge.action == "fetch"
+    ex = Executor(p, policy)
+    fetches = [m for m in ex.sem.moves(ex.state) if m.label == "fetch"]
+    # one per method, piling's first: the first move with the label is the dead end
+    rests = [m.child.robot_agenda if m.child else None for m in fetches]
+    assert [ex.sem.net.names_of(r) for r in rests if r is not None] == [["pile"], ["shelve"]]
+    assert ex.edge_move(root, edge) == fetches[1]
+    step = ex.robot_action_done("fetch")
+    assert step.node is not None and step.node.robot_agenda == ["shelve"]
+    report = walk_policy(p, policy)
+    assert report.ok and report.branches == policy.leaves, report.message
+    bt.answers_of(p, policy)  # walks every node along the policy's edges too
+    pytest.importorskip("py_trees", reason="py_trees is not installed (pip install 'ehatp[bt]')")
+    ticked = tick_py_trees(p, policy)
+    assert ticked.ok and ticked.branches == policy.leaves, ticked.message
+
+
+# -- the imported IPC-2020 domains (tests/test_hddl.py solves and validates them) ---------------
+
+# solved in a few seconds each; the slower ones are marked slow
+IPC_QUICK = ("2020-to-Blocksworld-GTOHP", "2020-to-Factories-simple", "2020-to-Towers",
+             "2020-po-Satellite", "2020-to-Elevator-Learned-ECAI-16", "2020-to-Robot",
+             "2020-to-Transport", "2020-po-Transport", "2020-to-Hiking", "2020-to-Snake",
+             "2020-to-Blocksworld-HPDDL", "2020-to-Multiarm-Blocksworld", "2020-to-Depots",
+             "2020-to-Minecraft-Regular", "2020-to-Rover-GTOHP", "2020-to-AssemblyHierarchical",
+             "2020-to-Logistics-Learned-ECAI-16", "2020-to-Satellite-GTOHP", "2020-po-PCP",
+             "2020-po-Rover")
+IPC_SLOW = ("2020-to-Childsnack", "2020-to-Minecraft-Player")
+
+
+@pytest.mark.filterwarnings("ignore:.*deprecated - use:DeprecationWarning")
+@pytest.mark.parametrize("name", [*IPC_QUICK, *(pytest.param(n, marks=pytest.mark.slow)
+                                                 for n in IPC_SLOW)])
+def test_every_imported_ipc_domain_that_validates_walks_to_the_goal(name: str) -> None:
+    pytest.importorskip("unified_planning", reason="ehatp[hddl] (unified-planning) not installed")
+    from ehatp.tools import hddl
+
+    shipped = {n: (d, p) for n, d, p in hddl.domains_shipped()}
+    d, pf = shipped[name]
+    # as the report imports them (hddl.check_domain): the human expects nothing of the robot
+    p = hddl.import_hddl(d, pf, sidecar=hddl.Sidecar(expects="nothing")).problem()
+    result = ehatp.solve(p, timeout=120)
+    assert result.policy is not None, result.reason
+    assert ehatp.validate(p, result.policy).ok
+    report = walk_policy(p, result.policy)
+    assert report.ok and report.branches == result.policy.leaves, report.message

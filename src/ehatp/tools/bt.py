@@ -3,8 +3,10 @@
 The policy is a graph (docs/policy-format.md); the tree follows it from the root:
 
 - a robot move becomes action nodes: ``RobotAction`` for an action, ``RobotWait`` for a wait,
-  ``Say`` for an inform, ``Silence`` for the robot's silent move at a speech opening; an action
-  (or wait) said with an inform is a ``Say`` then the ``RobotAction`` (or ``RobotWait``);
+  ``Say`` for an inform, a question to the human about its intention (``ask``) or an
+  announcement of the robot's own (``announce``), ``Silence`` for the robot's silent move at a
+  speech opening; an action (or wait) said with an inform is a ``Say`` then the
+  ``RobotAction`` (or ``RobotWait``);
 - a human choice becomes ``WaitHumanAction``, a stateful node that runs until the human acts
   and writes what it observed to a blackboard entry, then a ``Fallback`` with one branch per
   move the policy covers -- a ``HumanDid`` condition on that entry, a ``Say`` with the robot's
@@ -55,13 +57,17 @@ CUSTOM_NODES: tuple[tuple[str, str, str, tuple[tuple[str, str, str], ...]], ...]
         ("input", "args", "its arguments, separated by ';'"),
     )),
     ("Action", "RobotWait", "The robot waits: it lets the human take a turn.", ()),
-    ("Action", "Say", "The robot speaks: it informs the human of literals, or answers the "
-     "human's question truthfully.", (
-        ("input", "kind", "inform or answer"),
+    ("Action", "Say", "The robot speaks: it informs the human of literals, answers the "
+     "human's question truthfully, asks the human what it is about to do, or announces what "
+     "it is doing itself.", (
+        ("input", "kind", "inform, answer, ask or announce"),
         ("input", "literals", "inform: the literals told, separated by ';'"),
-        ("input", "question", "answer: the question asked"),
+        ("input", "question", "answer: the question asked; ask: what the robot asks about "
+         "(intention)"),
         ("input", "answer", "answer: yes or no (absent when the export did not know: the "
          "robot answers from what it knows)"),
+        ("input", "intention", "announce: the robot's tasks as it announces them, e.g. "
+         "clean(room), tidy(desk)"),
     )),
     ("Action", "Silence", "The robot stays silent where it could speak (the speech opening "
      "before the human's first move); it does nothing.", ()),
@@ -160,7 +166,7 @@ def from_policy(policy: Policy, answers: dict[tuple[int, str], bool] | None = No
             branches = []
             for m in node.moves:
                 said = []
-                if m.kind == "ask":
+                if m.kind == "ask" and m.agent != robot:
                     attrs = {"kind": "answer", "question": m.args[0] if m.args else m.action}
                     yes = answers.get((n, m.action))
                     if yes is not None:
@@ -189,6 +195,12 @@ def robot_nodes(m: PolicyMove) -> list[BTNode]:
     out: list[BTNode] = []
     if m.kind == "inform":
         out.append(BTNode("Say", {"kind": "inform", "literals": SEP.join(m.args)}))
+    elif m.kind == "ask":  # the robot asks the human's intention (§5)
+        out.append(BTNode("Say", {"kind": "ask", "question": m.args[0] if m.args else
+                                  m.action.removeprefix("ask(").removesuffix(")")}))
+    elif m.kind == "announce":  # the robot tells its own intention (§5)
+        out.append(BTNode("Say", {"kind": "announce", "intention": m.action.removeprefix(
+            "announce(").removesuffix(")")}))
     elif m.kind == "silence":
         out.append(BTNode("Silence"))
     elif m.kind in ("action", "wait"):
@@ -219,7 +231,7 @@ def answers_of(problem: Problem, policy: Policy) -> dict[tuple[int, str], bool]:
     for i in policy.topological_order():
         es, node = states[i], policy.nodes[i]
         for m in node.moves:
-            if m.kind == "ask":
+            if m.kind == "ask" and m.agent != policy.agents["robot"]:
                 yes = ex.answer(es, m.action)
                 if yes is not None:
                     out[(i, m.action)] = yes

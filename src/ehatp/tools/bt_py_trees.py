@@ -39,7 +39,9 @@ class RobotCommand:
 
     ``kind``: ``action`` (``name(args)``), ``wait``, ``say`` (``told`` the literals to inform,
     or ``question`` answered with ``answer``, yes/no, None when the tree does not know: answer
-    from what the robot knows) or ``silence`` (nothing). ``completes`` is the label of the
+    from what the robot knows; or, ``name`` ``ask``, the question ``ask(intention)`` to the
+    human; or, ``name`` ``announce``, the robot's own tasks in ``args``) or ``silence``
+    (nothing). ``completes`` is the label of the
     policy's robot move this command finishes (``inform(x) + place(r, box1)`` is a ``say``
     then an ``action``, the second completing it), None for the first part of such a move and
     for an answer (part of the human's question)."""
@@ -132,14 +134,24 @@ class Silence(_RobotBehaviour):
 
 
 class Say(_RobotBehaviour):
-    """The robot informs the human of ``literals``, or answers ``question``."""
+    """The robot informs the human of ``literals``, answers ``question``, asks the human its
+    intention (``kind`` ask) or announces its own (``kind`` announce, ``intention``)."""
 
     def __init__(self, io: Interface, kind: str, literals: str = "", question: str = "",
-                 answer: str | None = None, completes: str | None = None) -> None:
+                 answer: str | None = None, completes: str | None = None,
+                 intention: str = "") -> None:
         if kind == "answer":
             cmd = RobotCommand("say", f"answer({question})", "answer", (question,),
                                question=question, answer=answer, completes=completes)
             label = f"answer {question}: {answer or '?'}"
+        elif kind == "ask":
+            cmd = RobotCommand("say", f"ask({question})", "ask", (question,),
+                               completes=completes)
+            label = cmd.action
+        elif kind == "announce":
+            cmd = RobotCommand("say", f"announce({intention})", "announce", (intention,),
+                               completes=completes)
+            label = cmd.action
         else:
             told = _split(literals)
             cmd = RobotCommand("say", f"inform({', '.join(told)})", "inform", told, told,
@@ -257,7 +269,7 @@ def build(forest: Forest, io: Interface) -> Behaviour:
             return Silence(io, node.completes)
         if node.tag == "Say":
             return Say(io, a["kind"], a.get("literals", ""), a.get("question", ""),
-                       a.get("answer"), node.completes)
+                       a.get("answer"), node.completes, a.get("intention", ""))
         if node.tag == "WaitHumanAction":
             return WaitHumanAction(io, a["action"], a["expected"])
         if node.tag == "HumanDid":

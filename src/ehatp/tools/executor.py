@@ -20,9 +20,20 @@ import dataclasses
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from ..epistemic.semantics import ACTION, ASK, INFORM, PASS, WAIT, Move, Semantics, bits_of
+from ..epistemic.semantics import (
+    ACTION,
+    ANNOUNCE,
+    ANSWER,
+    ASK,
+    INFORM,
+    PASS,
+    WAIT,
+    Move,
+    Semantics,
+    bits_of,
+)
 from ..epistemic.state import HUMAN, ROBOT, EState, Worlds, states_of
-from ..errors import EhatpError
+from ..errors import EhatpError, InputError
 from ..model.formula import conj
 from ..model.grounding import Grounded, ground_problem
 from ..model.htn import Agenda
@@ -65,7 +76,7 @@ class Action:
     while doing an action or a wait (``speech = "with-action"``: ``inform(x) + place(r, b)``)."""
 
     agent: str
-    kind: str  # action | wait | pass | inform | ask | silence
+    kind: str  # action | wait | pass | inform | ask | silence | answer | announce
     label: str
     name: str
     args: tuple[str, ...]
@@ -127,7 +138,7 @@ def _norm(label: str) -> str:
 def human_agendas(es: EState) -> tuple[Agenda, ...]:
     """Return the human agendas the robot cannot tell apart at ``es`` (docs/semantics.md §3,
     "What the robot observes"): the one place the executor reads them."""
-    return (es.human_agenda,)
+    return es.human_agendas
 
 
 class Executor:
@@ -293,7 +304,8 @@ class Executor:
         (``solve_options`` go to :func:`ehatp.solve`) and its policy replaces :attr:`policy`
         and :attr:`problem`. Raises :class:`UncoveredHumanAction` when ``action`` is not a move
         of the human here or fails, and :class:`ExecutionError` when no policy is found; nothing
-        changes then. Returns the solver's result."""
+        changes then (also when the planner cannot replay the execution: an
+        :class:`UncoveredHumanAction` after ``action``). Returns the solver's result."""
         from ..search.planner import solve
 
         move: Move | None = None
@@ -309,7 +321,18 @@ class Executor:
             problem = dataclasses.replace(problem, after=tuple(
                 f"{s.action.agent} {s.action.label}" for s in self.history)
                 + (f"{self.human_name} {move.label}",))
-        result = solve(problem, **solve_options)
+        try:
+            result = solve(problem, **solve_options)
+        except InputError as e:  # the planner cannot replay the execution as an opening
+            why = (f"the planner cannot plan after it: it does not replay the execution "
+                   f"({e.problem})")
+            if move is None:
+                raise ExecutionError(f"no policy from here: {why}") from None
+            raise UncoveredHumanAction(
+                move.label, [a.label for a in self.expected_human_actions()],
+                [m.label for m in self.legal_human_moves()],
+                f"{self.human_name} did {move.label}, which the policy does not cover, and "
+                + why) from None
         if result.policy is None:
             raise ExecutionError(f"no policy from here: {result.reason or result.status}")
         if move is None and self.node is None:  # within the opening: the policy follows it
@@ -381,6 +404,16 @@ class Executor:
             lines.append(f"{H} saw it: {n0} -> {_worlds(len(mid))}")
         elif act.kind == INFORM:
             lines.append(f"{R} tells {H}: {', '.join(act.args)} ({n0} -> {_worlds(len(mid))})")
+        elif act.kind == ASK and act.agent == R:
+            lines.append(f"{R} asks {H} what {H} is about to do")
+        elif act.kind == ANSWER:
+            lines.append(f"{H} answers {R}: " + (", ".join(self._agenda(human_agendas(a)[0]))
+                                                 or "nothing more to do")
+                         + f"; {R} now knows {H}'s intention")
+        elif act.kind == ANNOUNCE:
+            lines.append(f"{R} tells {H} what it is doing: "
+                         + (", ".join(self._agenda(b.robot_agenda)) or "nothing more")
+                         + f" ({n0} -> {_worlds(len(mid))})")
         elif act.kind == ASK:
             answer = self.answer(b, act.label)
             said = "" if answer is None else f"; {R} answers {'yes' if answer else 'no'}"
@@ -407,6 +440,14 @@ class Executor:
     def belief_lines(self, es: EState | None = None) -> list[str]:
         """What each agent believes in ``es`` (default: now)."""
         es = self.state if es is None else es
+        R, H = self.robot_name, self.human_name
+        hyps = human_agendas(es)
+        intentions = [] if len(hyps) < 2 else [  # what the robot cannot see (§3)
+            f"{R} cannot tell which of {len(hyps)} intentions {H} follows: "
+            + " / ".join(", ".join(self._agenda(h)) or "nothing" for h in hyps)]
+        return self._world_lines(es) + intentions
+
+    def _world_lines(self, es: EState) -> list[str]:
         g, t = self.grounded, es.true
         R, H = self.robot_name, self.human_name
         ws = es.worlds

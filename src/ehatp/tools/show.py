@@ -21,9 +21,8 @@ from rich.console import Console
 from rich.text import Text
 
 from ..model.problem import Problem
-from ..policy_format import Policy, PolicyMove, PolicyNode, timeline
+from ..policy_format import COMM_KINDS, Policy, PolicyMove, PolicyNode, timeline
 
-COMM_KINDS = ("inform", "ask")
 MAX_TIMELINES = 100  # branches whose timelines are printed; there can be exponentially many
 
 # tree guides: (plain, unicode)
