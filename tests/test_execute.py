@@ -202,6 +202,49 @@ def test_replan_refuses_what_the_human_model_does_not_allow() -> None:
         ex.replan("pass")
 
 
+def forced_wait() -> Executor:
+    """The cube problem whose human asks when blocked, after its opening and the robot's wait:
+    the robot had nothing to do (a forced wait), so the fairness rule (docs/semantics.md §4)
+    lets the policy leave out the human's pass: it covers the human's two questions only."""
+    ex = Executor(ehatp.load(QUAL_ASK), policy_of(QUAL_ASK))
+    ex.replay_opening()
+    ex.robot_action_done("wait")
+    assert ex.state.forced
+    return ex
+
+
+ASKS = ["ask(can_put(w, box1))", "ask(can_put(w, box2))"]
+
+
+def test_a_pass_after_a_forced_wait_is_legal_but_not_covered_and_not_an_impossible_move() -> None:
+    ex = forced_wait()
+    assert [m.label for m in ex.possible_human_moves()] == ASKS
+    assert [m.label for m in ex.legal_human_moves()] == [*ASKS, "pass"]
+    assert ex.node is not None
+    with pytest.raises(UncoveredHumanAction) as e:
+        ex.observe_human_action("pass")
+    assert str(e.value).startswith(f"H did pass, which policy node {ex.node.id} does not cover "
+                                   "(a policy need not: after a forced robot wait")
+    assert e.value.possible == [*ASKS, "pass"]
+    with pytest.raises(UncoveredHumanAction, match="not a move of H here"):
+        ex.observe_human_action("dance")  # impossible: an error of its own
+    code, msgs = session(forced_wait(), lines({"human": "pass"}, {"human": ASKS[1]},
+                                              {"robot_done": True}, {"human": "place(w, box2)"}))
+    assert code == 0 and kinds(msgs)[-1] == "goal"
+    (error,) = [m for m in msgs if "error" in m]
+    assert error["error"] == "uncovered" and error["possible"] == [*ASKS, "pass"]
+
+
+@pytest.mark.xfail(strict=True, reason="the planner replays [problem] after with "
+                   "Semantics.follow, which refuses a pass the fairness rule left out")
+def test_with_replan_a_pass_after_a_forced_wait_is_replanned_from() -> None:
+    code, msgs = session(forced_wait(), lines({"human": "pass"}, {"robot_done": True},
+                                              {"human": "place(w, box2)"}), replan=True)
+    assert [m for m in msgs if "error" in m] == []
+    assert kinds(msgs).count("replanned") == 1 and code == 0 and kinds(msgs)[-1] == "goal"
+    assert [m["robot"]["action"] for m in msgs if "robot" in m][-1] == "inform(empty(box2))"
+
+
 def test_replan_within_the_opening_keeps_it() -> None:
     problem = ehatp.load(QUAL)
     ex = Executor(problem, policy_of(QUAL))

@@ -7,7 +7,9 @@ and talks to it through stdin and stdout, one JSON object a line. In: what the h
 is to act (``{"waiting": {...}}``), what the human now believes (``{"beliefs": {...}}``), the goal
 (``{"goal": true, ...}``) and errors (``{"error": KIND, ...}``). With ``--replan`` a human action
 the policy does not cover, but the human model allows, is applied and the robot replans from
-there (``{"replanned": {...}}``). See ``docs/execution.md``.
+there (``{"replanned": {...}}``): a move the model allows, or a ``pass`` the fairness rule lets
+a policy leave out (docs/semantics.md §4); only an impossible move is an error. See
+``docs/execution.md``.
 
 Exit codes: 0 the goal is reached; 1 the input ended before the goal, or replanning found no
 policy; 2 bad input before the protocol starts (one ``error:`` line on stderr) or a policy that
@@ -171,9 +173,12 @@ class Session:
         try:
             step = ex.observe_human_action(label)
         except UncoveredHumanAction as e:
+            # any move the human can make, the policy's or not (a pass the fairness rule lets a
+            # policy leave out included, docs/semantics.md §4), is replanned from; only a move
+            # that is impossible here (or fails) is an error
             replannable = self.replan and any(
                 "".join(m.label.split()) == "".join(e.action.split()) and m.child is not None
-                for m in ex.possible_human_moves())
+                for m in ex.legal_human_moves())
             if not replannable:
                 self.error("uncovered", str(e), line, action=e.action, expected=e.expected,
                            possible=e.possible)
