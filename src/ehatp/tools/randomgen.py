@@ -42,6 +42,19 @@ What a spec draws (probabilities are per problem unless said otherwise):
   seen whole, or per value) or as a counter up to 2-3 (it holds when at least 1; an effect
   making it true adds 1 or 2, saturating); the worlds draw values within the atom's truth, so
   the human may also be wrong about which spot or how many (docs/semantics.md §2, §5).
+- **Methods sharing a first action** (:data:`SHARED`): in 0.3 of the problems a robot method
+  (0.3 a human one) gets an alternative of its task that starts with the same ground action and
+  goes on otherwise: the robot cannot see which the human follows (docs/semantics.md §3), and
+  two robot moves share a label (an executor must follow the policy's recorded edge).
+- **Blocked attributed robot agendas** (:data:`BLOCKED`): in 0.2 of the problems one world's
+  robot agenda starts with an action the human believes not applicable there (§5: the human
+  then expects the robot not done in that world).
+- **The shelf case** (:data:`COMMIT`): in 0.12 of the problems the human also shelves an object
+  on a side it does not show until after ``grab``, and the robot clears one side: it must
+  commit blind unless it may ask the human's intention (or intentions are visible).
+- **Interchangeable objects** (:data:`TWINS`): in 0.4 of the problems with items (and ``put``
+  or ``take``) two more items ``u``, ``v``, alike in everything and named by nothing, that the
+  robot may ``stow`` and the human take: the symmetry reduction (§3) has states to merge.
 - **M_R^H** is M_R itself (0.35), an equal copy (0.05), or M_R changed 1-3 times: an operator
   dropped (with the methods using it), an extra operator the robot does not have (used by an
   extra method), a method dropped or added, an operator's precondition or effects redrawn, a
@@ -55,18 +68,24 @@ What a spec draws (probabilities are per problem unless said otherwise):
   inform (1-5 or 1.5), ask (1-5), wait (1, 2 or 0.5) and pass (1 or 2). On a share
   :data:`PLAIN` (0.4) of the seeds every model option keeps its default; elsewhere each is
   drawn: a blocked human passes silently (0.75), the largest informing set (3, else 2 or 1),
-  and away from the default with probability 0.1 each: the prototype pass rule, a
-  non-anticipating human, inform anywhere, speech with action, relevance "plan", no asking,
-  the expected objective (with ``pass`` weighted 1/2 one time in ten) and other tie-breaks
-  (0.2). Grounding: one problem in five grounds every task on demand (``[limits]
-  ground_ahead = 0``), one in five after 2 tasks, the rest ahead.
+  and away from the default with probability 0.1 each: the prototype or the idle pass rule,
+  visible intentions, a non-anticipating human, inform anywhere, speech with action, relevance
+  "plan", no asking, the robot announcing its intention, the expected objective (with ``pass``
+  weighted 1/2 one time in ten) and other tie-breaks (0.2); the robot may ask the human's
+  intention with probability 0.25. Grounding: one problem in five grounds every task on demand
+  (``[limits] ground_ahead = 0``), one in five after 2 tasks, the rest ahead.
 
 Settings are drawn in one place, :data:`SETTINGS`, a dict from ``"table.field"`` to a sampler;
 each is drawn from its own generator (seeded by the seed and the key), so adding a setting
 changes no other draw. :data:`TABLES` says how a table becomes part of the :class:`Problem`.
+The draws of :data:`LOOPS`, :data:`ORDERS`, :data:`VALUES`, :data:`SHARED`, :data:`BLOCKED`,
+:data:`COMMIT` and :data:`TWINS` also have generators of their own: each changes only the
+problems it draws on (the last four, and the options added with them, changed about 60% of
+the seeds' problems of version 0.2; the rest are the same problems).
 
-:func:`check` solves, validates and (on a sample) re-solves one seed; ``benchmarks/
-agreement.py`` and ``tests/test_agreement.py`` both run it through :func:`run`.
+:func:`check` solves, validates, executes (walks the policy on its branches through the
+Executor) and (on a sample) re-solves one seed; ``benchmarks/agreement.py`` and
+``tests/test_agreement.py`` both run it through :func:`run`.
 """
 
 from __future__ import annotations
@@ -139,7 +158,8 @@ SETTINGS: dict[str, Sampler] = {
     "communication.speech": _weighted([(Speech.TURN, 9), (Speech.WITH_ACTION, 1)]),
     "communication.relevance": _weighted([(Relevance.NEXT, 9), (Relevance.PLAN, 1)]),
     "communication.ask": _weighted([(True, 9), (False, 1)]),
-    "communication.robot_asks": _weighted([(False, 9), (True, 1)]),
+    # relevant only where the human's hidden intentions call for different robot moves
+    "communication.robot_asks": _weighted([(False, 3), (True, 1)]),
     "communication.announce": _weighted([(False, 9), (True, 1)]),
     "objective.kind": _weighted([(ObjectiveKind.WORST_CASE, 9), (ObjectiveKind.EXPECTED, 1)]),
     "objective.weights": _weighted([({}, 9), ({"pass": Fraction(1, 2)}, 1)]),
@@ -290,6 +310,7 @@ class Spec:
     values: tuple[ValueSpec, ...] = ()  # atoms written as state variables or counters
     twins: tuple[str, ...] = ()  # interchangeable items besides ITEMS (see TWINS)
     shared: tuple[str, ...] = ()  # methods added with another's first action (see SHARED)
+    commit: bool = False  # the shelf case of COMMIT
 
     def setting(self, key: str) -> object:
         """A drawn setting (KeyError for an option left at its default)."""
@@ -944,14 +965,14 @@ def draw_shared(spec: Spec) -> Spec:
 
 BLOCKED = 0.2
 """Blocked attributed robot agendas: the share of problems where one belief world's robot
-agenda starts with an action (of M_R and M_R^H) that the human believes not applicable now (one of its
-precondition literals false in that world, flipped there if need be; its done-condition not
-holding): either the robot's own agenda (when it starts with such an action, 1/2) or that
-action alone (followed by the robot's agenda, 1/2). The human then expects "the robot is not
-done" in that world whatever the robot did (docs/semantics.md §5: expectations are read per
-world; a blocked world contributes "not done"). Drawn before the values (a flipped atom may
-then become a state variable or a counter), from a generator of its own (see
-:func:`draw_blocked`)."""
+agenda starts with an action (of M_R and M_R^H) that the human believes not applicable now
+(one of its precondition literals false in that world, flipped there if need be; its
+done-condition not holding): either the robot's own agenda (when it starts with such an
+action, 1/2) or that action alone (followed by the robot's agenda, 1/2). The human then
+expects "the robot is not done" in that world whatever the robot did (docs/semantics.md §5:
+expectations are read per world; a blocked world contributes "not done"). Drawn before the
+values (a flipped atom may then become a state variable or a counter), from a generator of
+its own (see :func:`draw_blocked`)."""
 
 
 def draw_blocked(spec: Spec) -> Spec:
@@ -983,6 +1004,51 @@ def draw_blocked(spec: Spec) -> Spec:
         return spec  # done there, not blocked
     world = WorldSpec(tuple(flips), agenda, op.name)
     return replace(spec, worlds=(*spec.worlds[:k], world, *spec.worlds[k + 1:]))
+
+
+COMMIT = 0.12
+"""The shelf case (docs/semantics.md §3): the share of problems where the human also has a task
+``shelve`` (appended to its agenda) of two methods that both start with ``grab`` and then put
+the object on side a (``put_a``) or b (``put_b``), each only when that side is clear (``ca``,
+``cb``: false in the truth and in every world, with one observability class drawn for both),
+and the robot a task ``clear`` (first or last on its agenda) that clears one side, either one,
+once the human holds the object.
+Under hidden intentions the robot sees ``grab`` but not the side, and must commit blind: no
+policy, unless the robot may ask (``robot_asks``) or intentions are visible. M_R^H gets the
+robot's new task too (0.7) when it is not M_R itself. Drawn after the values, from a generator
+of its own (see :func:`draw_commit`)."""
+
+
+def draw_commit(spec: Spec) -> Spec:
+    """``spec`` with the shelf case of :data:`COMMIT` (``Spec.commit``)."""
+    r = random.Random(f"{spec.seed}:commit")
+    if r.random() >= COMMIT:
+        return spec
+    side = r.choices([k for k, _ in OBS_KINDS], [w for _, w in OBS_KINDS])[0]
+    atoms = (*spec.atoms, ("ca", side), ("cb", side), ("held", "always"))
+    # the robot clears a side once the human holds the object, not before (committing then
+    # would fail on the other side whatever the human's intention is seen or not)
+    ops = tuple(OpSpec(f"clr_{x}", False, (("held", True),), ((f"c{x}", True),)) for x in "ab")
+
+    def with_clear(m: ModelSpec) -> ModelSpec:
+        return replace(m, ops=(*m.ops, *ops), tasks=(*m.tasks, TaskSpec("clear")),
+                       methods=(*m.methods, MethodSpec("clear", "ka", (), ("clr_a",)),
+                                MethodSpec("clear", "kb", (), ("clr_b",))))
+
+    human = replace(spec.human, ops=(
+        *spec.human.ops, OpSpec("grab", eff=(("held", True),)),
+        *(OpSpec(f"put_{x}", False, ((f"c{x}", True), ("held", True)), (("held", False),))
+          for x in "ab")),
+        tasks=(*spec.human.tasks, TaskSpec("shelve")),
+        methods=(*spec.human.methods, MethodSpec("shelve", "sa", (), ("grab", "put_a")),
+                 MethodSpec("shelve", "sb", (), ("grab", "put_b"))))
+    agenda = ("clear", *spec.robot_agenda) if r.random() < 0.5 else (*spec.robot_agenda, "clear")
+    seen = spec.robot_seen
+    if seen is not None and r.random() < 0.7:
+        seen = with_clear(seen)
+    return replace(spec, atoms=atoms, robot=with_clear(spec.robot), robot_seen=seen,
+                   human=human, robot_agenda=agenda,
+                   human_agenda=(*spec.human_agenda, "shelve"), commit=True)
 
 
 TWINS = 0.4
@@ -1031,7 +1097,7 @@ def draw_twins(spec: Spec) -> Spec:
 def draw(seed: int) -> Spec:
     """The spec of seed ``seed`` (deterministic)."""
     spec = draw_shared(draw_orders(draw_loops(_Drawer(seed).spec())))
-    return draw_twins(draw_values(draw_blocked(spec)))
+    return draw_twins(draw_commit(draw_values(draw_blocked(spec))))
 
 
 # --- building ---------------------------------------------------------------------------------
@@ -1373,6 +1439,6 @@ def summary(outcomes: Sequence[Outcome]) -> dict[str, int]:
     return counts
 
 
-__all__ = ["BLOCKED", "EXECUTION", "FAILURES", "KINDS", "SETTINGS", "SHARED", "TABLES", "TWINS",
-           "VALUES", "WALK_CAP", "ModelSpec", "Outcome", "Spec", "ValueSpec", "build", "check",
-           "draw", "hidden_choices", "problem", "run", "summary"]
+__all__ = ["BLOCKED", "COMMIT", "EXECUTION", "FAILURES", "KINDS", "SETTINGS", "SHARED", "TABLES",
+           "TWINS", "VALUES", "WALK_CAP", "ModelSpec", "Outcome", "Spec", "ValueSpec", "build",
+           "check", "draw", "hidden_choices", "problem", "run", "summary"]
