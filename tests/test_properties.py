@@ -1,23 +1,30 @@
 """Property tests on random problems (``ehatp.tools.randomgen``, seeds drawn by hypothesis):
-the planner never crashes, every policy it returns passes the independent validator, the result
-does not depend on declaration order, and solving twice gives byte-identical JSON."""
+the planner never crashes, every policy it returns passes the independent validator, executes to
+the goal on every branch through the Executor and never branches on a choice the robot cannot
+see, the result does not depend on declaration order, and solving twice gives byte-identical
+JSON."""
 
 from __future__ import annotations
+
+import json
 
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import ehatp
+from ehatp.policy_format import Policy
 from ehatp.tools import randomgen
+from ehatp.tools.walk import walk_policy
 
-SETTINGS = settings(max_examples=200, deadline=None, derandomize=True,
+SETTINGS = settings(max_examples=120, deadline=None, derandomize=True,
                     suppress_health_check=[HealthCheck.too_slow])
 LIMITS = {"max_states": randomgen.MAX_STATES, "timeout": 10}
 
 
 @SETTINGS
 @given(st.integers(0, 2**32 - 1))
-def test_policies_pass_the_validator_and_do_not_depend_on_declaration_order(seed: int) -> None:
+def test_policies_pass_the_validator_execute_and_do_not_depend_on_declaration_order(
+        seed: int) -> None:
     p = randomgen.problem(seed)
     r = ehatp.solve(p, **LIMITS)  # type: ignore[arg-type]
     assert r.status in ("solved", "unsolvable"), r.reason
@@ -27,6 +34,11 @@ def test_policies_pass_the_validator_and_do_not_depend_on_declaration_order(seed
     assert r.policy is not None
     report = ehatp.validate(p, r.policy)
     assert report.ok, report.message
+    read = Policy.from_dict(json.loads(r.policy.to_json()))  # as its file reads
+    assert randomgen.hidden_choices(read) == []
+    walk = walk_policy(p, read, cap=randomgen.WALK_CAP)
+    assert walk.ok, walk.message
+    assert walk.branches >= 1
     again = ehatp.solve(randomgen.problem(seed, reverse=True), **LIMITS)  # type: ignore[arg-type]
     assert again.policy is not None
     assert again.policy.to_json() == r.policy.to_json()
