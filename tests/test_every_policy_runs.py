@@ -12,7 +12,8 @@ from pathlib import Path
 import pytest
 
 import ehatp
-from ehatp import Domain
+from ehatp import Communication, Domain, HumanModel, Var
+from ehatp.model.options import Intentions, Speech
 from ehatp.model.problem import Problem
 from ehatp.policy_format import Policy
 from ehatp.tools import bt
@@ -20,6 +21,7 @@ from ehatp.tools.executor import Executor
 from ehatp.tools.walk import tick_py_trees, walk_policy
 
 from .scenarios import problem as scenario
+from .test_intentions import car_problem, shelf_problem
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = sorted((ROOT / "examples").glob("**/*.toml"))
@@ -139,6 +141,79 @@ def test_a_robot_move_that_shares_its_label_is_followed_along_the_policy_s_edge(
     pytest.importorskip("py_trees", reason="py_trees is not installed (pip install 'ehatp[bt]')")
     ticked = tick_py_trees(p, policy)
     assert ticked.ok and ticked.branches == policy.leaves, ticked.message
+
+
+# -- the moves of hidden intentions and of the new ways to talk ---------------------------------
+
+
+def errand(**kw: object) -> Problem:
+    """The robot sweeps (leaving no trace) while the human is out: back home, the human's worlds
+    differ only in the robot's agenda (swept or not), which no ``inform`` can tell; with
+    ``announce`` the robot says it has nothing left to do (docs/semantics.md §5)."""
+    d = Domain("errand")
+    Place = d.type("place")
+    p, q = Var("p", Place), Var("q", Place)
+    at = d.predicate("at", p)
+    d.copresence = at("home")
+    d.robot.action("sweep", pre=at("out"), effects=[])
+    d.human.action("go", p, q, pre=at(p) & ~at(q), effects=[at(q), ~at(p)])
+    return scenario(d, init=["at(home)"], robot=["sweep"],
+                    human=["go(home, out)", "go(out, home)"], objects={"place": ["home", "out"]},
+                    **kw)  # type: ignore[arg-type]
+
+
+OPTIONS = {  # a problem, and a move kind (or label) its policy must use
+    "visible intentions": (lambda: shelf_problem(
+        human_model=HumanModel(intentions=Intentions.VISIBLE)), "grab [place(l)]"),
+    "robot asks": (lambda: shelf_problem(communication=Communication(robot_asks=True)),
+                   "answer"),
+    "announce": (lambda: errand(communication=Communication(announce=True)), "announce"),
+    "speech with an action": (lambda: car_problem(communication=Communication(
+        speech=Speech.WITH_ACTION)), "inform(oil_ok) + refill"),
+}
+
+
+@pytest.mark.parametrize("case", list(OPTIONS))
+def test_policies_that_ask_answer_announce_or_speak_with_an_action_walk_and_tick(
+        case: str) -> None:
+    make, uses = OPTIONS[case]
+    p = make()
+    result = ehatp.solve(p)
+    assert result.policy is not None, result.reason
+    policy = result.policy
+    assert any(uses in (m.kind, m.action) for _, m in policy.edges())
+    report = walk_policy(p, policy)
+    assert report.ok and report.branches == policy.leaves, report.message
+    pytest.importorskip("py_trees", reason="py_trees is not installed (pip install 'ehatp[bt]')")
+    ticked = tick_py_trees(p, policy)
+    assert ticked.ok and ticked.branches == policy.leaves, ticked.message
+
+
+def explained(p: Problem, *human: str) -> list[str]:
+    """The executor's explanation of every step of the branch where the human plays
+    ``human``, in order (the robot plays the policy)."""
+    result = ehatp.solve(p)
+    assert result.policy is not None
+    ex = Executor(p, result.policy)
+    moves = list(human)
+    out: list[str] = []
+    while not ex.done:
+        step = (ex.robot_action_done() if ex.next_robot_action() is not None
+                else ex.observe_human_action(moves.pop(0)))
+        out += [f"{step.action.agent} {step.action.label}", *ex.explain(step)]
+    assert ex.goal_reached and not moves
+    return out
+
+
+def test_the_executor_explains_questions_answers_and_announcements() -> None:
+    lines = explained(shelf_problem(communication=Communication(robot_asks=True)),
+                      "grab", "answer(place(r))", "pass", "place(r)")
+    assert "R ask(intention)" in lines and "R asks H what H is about to do" in lines
+    assert "H answers R: place(r); R now knows H's intention" in lines
+    assert any(x.startswith("R cannot tell which of 2 intentions H follows: ") for x in lines)
+    lines = explained(errand(communication=Communication(announce=True)),
+                      "go(home, out)", "go(out, home)")
+    assert "R tells H what it is doing: nothing more (2 -> 1 world)" in lines
 
 
 # -- the imported IPC-2020 domains (tests/test_hddl.py solves and validates them) ---------------
