@@ -8,6 +8,10 @@ it with :meth:`Executor.robot_action_done`; what the human does is reported with
 policy has no branch for it. A problem's fixed opening (``[problem] after``) is replayed first,
 as moves the executor expects (or at once, as moves already made: :meth:`Executor.replay_opening`).
 
+The executor moves along the policy's recorded edges: where several moves share the label the
+policy names (two robot methods that start with the same action), it takes the one whose result
+is the node the edge leads to (:meth:`Executor.edge_move`), never merely the first.
+
 When the human leaves the policy, :meth:`Executor.as_problem` states the execution so far as a new
 problem and :meth:`Executor.replan` plans from where the robot is and follows the new policy. See
 ``docs/simulation.md`` and ``docs/execution.md``.
