@@ -225,6 +225,21 @@ def test_cli_stops_with_exit_1_when_the_policy_does_not_cover(tmp_path: Path) ->
         "ask(can_put(w, box1)) or ask(can_put(w, box2))")
 
 
+def test_a_scripted_pass_after_a_forced_wait_leaves_the_policy_and_is_no_bad_input(
+        tmp_path: Path) -> None:
+    # the human who asks when blocked: after the robot's forced wait the fairness rule lets
+    # the policy leave out the human's pass (docs/semantics.md §4), but the human can pass
+    pfile = write_policy(tmp_path, QUAL_ASK)
+    script = tmp_path / "s.txt"
+    script.write_text("R wait\npass\n", encoding="utf-8")
+    code, out = invoke(str(QUAL_ASK), "--policy", str(pfile), "--script", str(script))
+    assert code == 1
+    assert out.splitlines()[-1] == (
+        "stopped: H did pass, which policy node 1 does not cover (a policy need not: after a "
+        "forced robot wait, docs/semantics.md §4); the policy expects ask(can_put(w, box1)) or "
+        "ask(can_put(w, box2))")
+
+
 def test_script_expecting_another_robot_move_stops(tmp_path: Path) -> None:
     script = tmp_path / "s.txt"
     script.write_text("R wait\n", encoding="utf-8")

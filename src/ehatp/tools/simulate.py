@@ -27,7 +27,8 @@ from .show import print_notes
 
 MODES = ("ask", "random", "first", "script")
 
-# Chooses the human's move among the model's options; returns the label played.
+# Chooses the human's move among the moves it can make (Executor.legal_human_moves: the model's
+# options, and a pass the fairness rule lets a policy leave out); returns the label played.
 Chooser = Callable[[Executor, list[Move]], str]
 
 
@@ -141,8 +142,9 @@ def asking_human(stdin: TextIO, out: Callable[[str], None]) -> Chooser:
 
 
 def random_human(seed: int) -> Chooser:
+    """A seeded random pick among the model's options (:meth:`Executor.possible_human_moves`)."""
     rng = random.Random(seed)
-    return lambda ex, moves: rng.choice(moves).label
+    return lambda ex, moves: rng.choice(ex.possible_human_moves()).label
 
 
 def first_human(ex: Executor, moves: list[Move]) -> str:
@@ -174,7 +176,7 @@ def simulate(ex: Executor, choose: Chooser, out: Callable[[str], None],
             elif ex.in_opening:
                 step = ex.observe_human_action(ex.expected_human_actions()[0])
             else:
-                label = choose(ex, ex.possible_human_moves())
+                label = choose(ex, ex.legal_human_moves())
                 step = ex.observe_human_action(label)
             if step.node is None:
                 where = "opening"
