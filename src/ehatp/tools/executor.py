@@ -267,7 +267,7 @@ class Executor:
         the problem again (e.g. to run many executions from one start)."""
         other = copy.copy(self)
         other.sem = copy.copy(self.sem)  # its memo tables are shared: they are pure
-        other.sem.seen = {}
+        other.sem.seen = dict(self.sem.seen)  # what assessment saw of the moves computed now
         other.history, other._opening = list(self.history), list(self._opening)
         return other
 
