@@ -1330,9 +1330,10 @@ def hidden_choices(policy: Policy) -> list[str]:
 
 
 def check(seed: int, *, determinism: bool | None = None, max_states: int = MAX_STATES,
-          timeout: float = TIMEOUT, walk_cap: int = WALK_CAP) -> Outcome:
+          timeout: float = TIMEOUT, walk_cap: int | None = None) -> Outcome:
     """Solve the problem of ``seed``, validate any policy the planner returns, look in its file
-    for a hidden choice and walk it on up to ``walk_cap`` branches through the Executor, and
+    for a hidden choice and walk it on up to ``walk_cap`` (default :data:`WALK_CAP`, read at
+    the call) branches through the Executor, and
     (when ``determinism``, by default for one seed in :data:`DETERMINISM_EVERY`) solve it again
     and declared in reverse order, expecting byte-identical policy JSON."""
     from ..check.validator import validate
@@ -1369,7 +1370,7 @@ def check(seed: int, *, determinism: bool | None = None, max_states: int = MAX_S
             hidden = hidden_choices(read)
             stage = "walk"
             t0 = time.perf_counter()
-            walk = walk_policy(prob, read, cap=walk_cap)
+            walk = walk_policy(prob, read, cap=WALK_CAP if walk_cap is None else walk_cap)
             execution = {"executed": True, "branches": walk.branches, "capped": walk.capped,
                          "unexecutable": "" if walk.ok else walk.message.splitlines()[0],
                          "hidden_choice": "; ".join(hidden),
