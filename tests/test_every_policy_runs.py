@@ -90,6 +90,19 @@ def test_a_policy_that_does_not_fit_fails_the_walk_with_the_executor_s_error() -
     assert f"(H {second['action']})" in report.message
 
 
+def test_a_human_choice_covered_twice_under_one_label_fails_the_walk() -> None:
+    # a robot that sees only the human's action cannot tell two such branches apart (§3)
+    problem, policy = solved(ROOT / "examples" / "cubes" / "p2.toml")
+    d = policy.to_dict()
+    first, second = d["nodes"][0]["moves"][:2]
+    second["action"] = first["action"]
+    report = walk_policy(problem, Policy.from_dict(d))
+    assert not report.ok and report.branches == 0
+    assert report.message == (f"branch 1 (no move): policy node 0 covers H {first['action']} "
+                              "more than once: a robot that sees only the action cannot tell "
+                              "its branches apart")
+
+
 def test_a_problem_with_a_fixed_opening_walks_from_where_the_opening_ends() -> None:
     problem, policy = solved(ROOT / "examples" / "cubes" / "qualitative.toml")
     assert problem.after

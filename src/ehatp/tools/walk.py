@@ -74,9 +74,9 @@ def walk_policy(problem: Problem, policy: Policy, *, cap: int = DEFAULT_CAP) -> 
                     continue
                 assert ex.node is not None
                 labels = [m.action for m in ex.node.moves]
-                seen = {"".join(x.split()) for x in labels}
-                if len(seen) != len(labels):
-                    dup = next(x for x in labels if labels.count(x) > 1)
+                norm = ["".join(x.split()) for x in labels]
+                if len(set(norm)) != len(norm):
+                    dup = next(x for x, n in zip(labels, norm, strict=True) if norm.count(n) > 1)
                     raise ExecutionError(
                         f"policy node {ex.node.id} covers {ex.human_name} {dup} more than once: "
                         f"a robot that sees only the action cannot tell its branches apart")
