@@ -1424,6 +1424,14 @@ class _Validator:
                     continue
                 if es.turn == ROBOT:
                     r = self.robot_steps(es, label)
+                    base, bracket, names = label.rstrip().rpartition(" [")
+                    if isinstance(r, str) and bracket and names.endswith("]"):
+                        # §4: "fetch [shelve]" names the move by the agenda it leaves
+                        r = self.robot_steps(es, base)
+                        if not isinstance(r, str):
+                            left = "".join(names[:-1].split())
+                            r = [st for st in r if st.after is not None and "".join(
+                                ",".join(sem.shown(st.after.robot)).split()) == left]
                     if isinstance(r, str):
                         why = r
                         continue

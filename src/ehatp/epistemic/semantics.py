@@ -100,8 +100,11 @@ class Semantics:
             r.check = check
 
     def follow(self, es: EState, label: str) -> Move:
-        """The move of the agent to move whose label is ``label`` (an agent name may lead,
-        spaces are ignored); ValueError naming the options when there is none."""
+        """§4: the move of the agent to move whose label is ``label`` (an agent name may lead,
+        spaces are ignored); ValueError naming the options when there is none. Where several
+        moves share a label (two robot methods that start with the same action), the label
+        may be followed by the agenda the move leaves, in brackets -- ``fetch [shelve]`` --
+        to name one (:meth:`trace_label` writes it); without, the first is taken."""
         head, _, rest = label.strip().partition(" ")
         if head in self.names and rest:
             if head != self.names[es.turn]:
@@ -110,14 +113,32 @@ class Semantics:
             label = rest
         want = "".join(label.split())
         moves = self.moves(es)
-        for m in moves:
-            if "".join(m.label.split()) == want:
-                if m.child is None:
-                    raise ValueError(f"{label!r} fails here: {m.failure}")
-                return m
+        found = next((m for m in moves if "".join(m.label.split()) == want), None)
+        if found is None and want.endswith("]") and "[" in want:
+            base, _, after = want[:-1].rpartition("[")
+            found = next((m for m in moves if "".join(m.label.split()) == base
+                          and m.child is not None and self._leaves(m.child) == after), None)
+        if found is not None:
+            if found.child is None:
+                raise ValueError(f"{label!r} fails here: {found.failure}")
+            return found
         who = self.names[es.turn]
         raise ValueError(f"{label!r} is not a move of {who} here; options: "
                          + ", ".join(m.label for m in moves))
+
+    def trace_label(self, es: EState, move: Move) -> str:
+        """§4: ``move``'s label as :meth:`follow` reads it back from ``es`` to this very move:
+        the label, followed by the agenda it leaves in brackets when another move of ``es``
+        has the same label and leads elsewhere."""
+        if move.agent != ROBOT or move.child is None:  # human labels are unique (§4)
+            return move.label
+        if not any(m.label == move.label and m.child != move.child for m in self.moves(es)):
+            return move.label
+        return f"{move.label} [{', '.join(self.net.names_of(move.child.robot_agenda))}]"
+
+    def _leaves(self, child: EState) -> str:
+        """The robot agenda ``child`` holds, as :meth:`trace_label` writes it (spaces off)."""
+        return "".join(",".join(self.net.names_of(child.robot_agenda)).split())
 
     def describe(self, move: Move) -> Call:
         """The move as name, arguments and label (§4-§5): the one translation used by the

@@ -203,5 +203,6 @@ def read_options(r: _Reader, data: Mapping[str, Any]
     return human, comm, objective, tuple(notes)
 
 
-__all__ = ["DEFAULT_TIES", "OPTION_KEYS", "TIE_KEYS", "Communication", "HumanModel", "InformWhere", "Intentions",
-           "Objective", "ObjectiveKind", "Passes", "Relevance", "Speech", "read_options"]
+__all__ = ["DEFAULT_TIES", "OPTION_KEYS", "TIE_KEYS", "Communication", "HumanModel", "InformWhere",
+           "Intentions", "Objective", "ObjectiveKind", "Passes", "Relevance", "Speech",
+           "read_options"]
