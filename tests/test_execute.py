@@ -245,8 +245,6 @@ def test_with_replan_a_pass_after_a_forced_wait_is_replanned_from() -> None:
     assert [m["robot"]["action"] for m in msgs if "robot" in m][-1] == "inform(empty(box2))"
 
 
-@pytest.mark.xfail(strict=True, reason="the planner replays [problem] after by label, taking the "
-                   "first move with it (Semantics.follow), not the one the execution took")
 def test_replanning_after_a_robot_move_that_shares_its_label_replays_the_move_taken() -> None:
     from .test_every_policy_runs import fetching
 
@@ -254,10 +252,13 @@ def test_replanning_after_a_robot_move_that_shares_its_label_replays_the_move_ta
     result = ehatp.solve(problem)
     assert result.policy is not None
     ex = Executor(problem, result.policy)
-    ex.robot_action_done("fetch")  # the policy's, toward shelve
+    step = ex.robot_action_done("fetch")  # the policy's, toward shelve
+    assert step.action.label == "fetch" and step.played == "R fetch [shelve]"
     before = ex.state
-    ex.replan()
+    new = ex.replan().policy
+    assert new is not None and new.after == ["R fetch [shelve]"]
     assert ex.state == before and ex.node is not None and ex.node.robot_agenda == ["shelve"]
+    assert ehatp.validate(ex.as_problem(), new).ok
 
 
 def test_replan_within_the_opening_keeps_it() -> None:

@@ -86,7 +86,7 @@ class Session:
             "problem": ex.problem.name, "domain": ex.problem.domain.name,
             "robot": ex.robot_name, "human": ex.human_name, "policy": source,
             "cost": num(p.cost), "nodes": len(p.nodes), "replan": self.replan,
-            "opening": [f"{s.action.agent} {s.action.label}" for s in opening]}})
+            "opening": [s.played for s in opening]}})
         self.emit({"beliefs": beliefs(ex)})
         self.prompt()
 

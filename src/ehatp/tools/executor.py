@@ -109,7 +109,9 @@ class Step:
     the opening). ``assessed`` holds the human's worlds just before situation assessment, when
     it ran on this step. ``replanned`` marks a human move the policy did not cover, after which
     the execution follows a new policy (:meth:`Executor.replan`); ``node`` is that policy's
-    root."""
+    root. ``trace`` is the move as a problem's fixed opening names it, when that is not its
+    label: ``fetch [shelve]`` where robot moves share a label (:meth:`Semantics.trace_label`,
+    read back by :meth:`Executor.as_problem`'s problem)."""
 
     index: int
     action: Action
@@ -119,6 +121,12 @@ class Step:
     opening: bool
     assessed: Worlds | None
     replanned: bool = False
+    trace: str = ""
+
+    @property
+    def played(self) -> str:
+        """The step as an opening step (``[problem] after``): the agent, then the move."""
+        return f"{self.action.agent} {self.trace or self.action.label}"
 
 
 class _TracingSemantics(Semantics):
@@ -292,7 +300,7 @@ class Executor:
         start is assessed again (``Semantics.initial``). Replaying the moves through the same
         semantics gives exactly the tracked state (:meth:`replan` checks the new policy's root
         against it); the cost is a replay of the moves, linear in the history."""
-        played = tuple(f"{s.action.agent} {s.action.label}" for s in self.history)
+        played = tuple(s.played for s in self.history)
         desc = self.problem.description
         return dataclasses.replace(
             self.problem, after=played + tuple(self._opening), notes=(),
@@ -323,8 +331,7 @@ class Executor:
         problem = self.as_problem()
         if move is not None:  # played after the history; the rest of the opening is dropped
             problem = dataclasses.replace(problem, after=tuple(
-                f"{s.action.agent} {s.action.label}" for s in self.history)
-                + (f"{self.human_name} {move.label}",))
+                s.played for s in self.history) + (f"{self.human_name} {move.label}",))
         try:
             result = solve(problem, **solve_options)
         except InputError as e:  # the planner cannot replay the execution as an opening
@@ -615,6 +622,10 @@ class Executor:
         policy moves to the node of ``edge``, the edge actually taken."""
         assert move.child is not None
         before = self.state
+        trace = ""  # robot moves that share the label and lead elsewhere: name the agenda
+        if move.agent == ROBOT and any(m.label == move.label and m.child != move.child
+                                       for m in self._moves()):
+            trace = self.sem.trace_label(before, move)
         assessed = self.sem.seen.get((move.child.true, move.child.worlds))
         self._forget()  # only the chosen move's assessment matters
         self.state = move.child
@@ -633,7 +644,8 @@ class Executor:
             self.node = node
             self._check(node)
         step = Step(len(self.history) + 1, self._action(move, before.true), before, self.state,
-                    node, opening, assessed if assessed != self.state.worlds else None)
+                    node, opening, assessed if assessed != self.state.worlds else None,
+                    trace=trace)
         self.history.append(step)
         return step
 
