@@ -235,8 +235,6 @@ def test_a_pass_after_a_forced_wait_is_legal_but_not_covered_and_not_an_impossib
     assert error["error"] == "uncovered" and error["possible"] == [*ASKS, "pass"]
 
 
-@pytest.mark.xfail(strict=True, reason="the planner replays [problem] after with "
-                   "Semantics.follow, which refuses a pass the fairness rule left out")
 def test_with_replan_a_pass_after_a_forced_wait_is_replanned_from() -> None:
     code, msgs = session(forced_wait(), lines({"human": "pass"}, {"robot_done": True},
                                               {"human": "place(w, box2)"}), replan=True)

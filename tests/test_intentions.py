@@ -44,9 +44,14 @@ def shelf_problem(**kw: object) -> ehatp.Problem:
 
 
 def runs(p: ehatp.Problem, result: ehatp.Result) -> None:
-    """Whatever solves also runs: the policy is walked on every branch and validated."""
+    """Whatever solves also runs: the policy validates and is walked through the Executor on
+    every branch to the goal."""
+    from ehatp.tools.walk import walk_policy
+
     assert result.policy is not None
     assert ehatp.validate(p, result.policy).ok
+    walked = walk_policy(p, result.policy)
+    assert walked.ok and not walked.capped, walked.message
 
 
 def test_the_robot_cannot_follow_a_human_method_it_cannot_see_so_the_shelf_has_no_policy() -> None:
