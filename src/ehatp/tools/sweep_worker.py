@@ -20,6 +20,7 @@ with ``status = "error"``. Isolation (see :class:`Watchdog` and :func:`memory_li
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import gc
 import json
 import os
@@ -295,8 +296,18 @@ def _watched(delta: int) -> None:
     global _watching, _watch_base
     with _WATCH_LOCK:
         if _watching == 0:
+            _release_free_heap()
             _watch_base = resident()
         _watching += delta
+
+
+def _release_free_heap() -> None:
+    """Give the heap the process no longer uses back to the system (glibc's ``malloc_trim``),
+    so that the watch's base is what the process really holds: an instance reusing freed heap
+    would otherwise grow past its budget without the resident memory showing it."""
+    gc.collect()
+    with contextlib.suppress(OSError, AttributeError):  # not glibc: the base is less exact
+        ctypes.CDLL(None).malloc_trim(0)
 
 
 _LOCK = threading.Lock()
