@@ -1,4 +1,9 @@
-"""Errors that reach the user as one clear line (the CLI exits with code 2 on them)."""
+"""Every error ehatp reports to its users, each as one clear line (the CLI exits with code 2 on
+bad input; ``ehatp.cli.common.user_errors`` says how each one is worded).
+
+One module, so that a caller catches :class:`EhatpError` for "the user's mistake or situation,
+not a bug", and a subclass where it wants to tell one case apart.
+"""
 
 from __future__ import annotations
 
@@ -17,3 +22,60 @@ class InputError(EhatpError):
     def line(self) -> str:
         where = f"{self.file}:{self.place}" if self.place else self.file
         return f"{where}: {self.problem}" + (f"; {self.fix}" if self.fix else "")
+
+
+# --- the model -------------------------------------------------------------------------------
+
+
+class DomainError(EhatpError):
+    """A mistake in a domain definition (raised while the domain module is built)."""
+
+
+# --- execution (ehatp.run) -------------------------------------------------------------------
+
+
+class ExecutionError(EhatpError):
+    """The execution cannot go on (wrong turn, or the policy and the problem disagree)."""
+
+
+class PolicyMismatch(ExecutionError):
+    """The policy does not fit the problem: its nodes disagree with the semantics."""
+
+
+class UncoveredHumanAction(ExecutionError):
+    """The human did something the policy has no branch for.
+
+    ``action`` is what was observed, ``expected`` the labels the policy covers here,
+    ``possible`` every move the human model allows here, ``reason`` why it is not covered.
+    """
+
+    def __init__(self, action: str, expected: list[str], possible: list[str],
+                 reason: str) -> None:
+        self.action, self.expected, self.possible, self.reason = action, expected, possible, reason
+        super().__init__(f"{reason}; the policy expects "
+                         + (" or ".join(expected) if expected else "no human action here"))
+
+
+# --- formats and experiments -----------------------------------------------------------------
+
+
+class HddlUnsupported(EhatpError):
+    """The HDDL input uses something ehatp cannot express; ``str(e)`` is one line saying
+    what (docs/hddl.md lists what maps)."""
+
+
+class HddlMissing(EhatpError):
+    """unified-planning, which reads HDDL, is not installed."""
+
+
+class DotMissing(EhatpError):
+    """Graphviz's ``dot`` program is not installed (``ehatp render --format svg``)."""
+
+
+class ExamplesNotFound(EhatpError):
+    """The example problems are neither in the package nor in a source checkout."""
+
+
+__all__ = ["DomainError", "DotMissing", "EhatpError", "ExamplesNotFound", "ExecutionError",
+           "HddlMissing", "HddlUnsupported", "InputError", "PolicyMismatch",
+           "UncoveredHumanAction"]

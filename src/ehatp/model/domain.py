@@ -22,7 +22,7 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal, TypeVar
 
-from ..errors import EhatpError
+from ..errors import DomainError as DomainError  # defined in errors.py; its old home
 from .formula import (
     TRUE,
     And,
@@ -43,10 +43,6 @@ from .formula import (
 )
 
 AGENT_TYPE = "agent"
-
-
-class DomainError(EhatpError):
-    """A mistake in a domain definition (raised while the domain module is built)."""
 
 
 # --- domain factories ------------------------------------------------------------------------

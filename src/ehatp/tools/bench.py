@@ -19,7 +19,6 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
 from ..errors import EhatpError
-from ..model.domain import DomainError
 from ..model.problem import load
 from ..search.planner import solve
 from .examples import examples_dir
@@ -75,7 +74,7 @@ def run_instance(row: PaperRow, repeat: int = 3, notify: Notify | None = None) -
     }
     try:
         problem = load(examples_dir() / row.path)
-    except (EhatpError, DomainError) as e:
+    except EhatpError as e:
         out["error"] = str(e)
         return out
     best = best_search = float("inf")
@@ -86,7 +85,7 @@ def run_instance(row: PaperRow, repeat: int = 3, notify: Notify | None = None) -
         t0 = time.perf_counter()
         try:
             result = solve(problem)
-        except (EhatpError, DomainError) as e:
+        except EhatpError as e:
             out["error"] = str(e)
             return out
         best = min(best, time.perf_counter() - t0)

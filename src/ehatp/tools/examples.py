@@ -10,13 +10,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..errors import EhatpError
+from ..errors import ExamplesNotFound
 
 _PACKAGE = Path(__file__).resolve().parent.parent  # .../ehatp
-
-
-class ExamplesNotFound(EhatpError):
-    """The example problems are neither in the package nor in a source checkout."""
 
 
 def examples_dir() -> Path:

@@ -37,7 +37,12 @@ from ..epistemic.semantics import (
     bits_of,
 )
 from ..epistemic.state import HUMAN, ROBOT, EState, Worlds, states_of
-from ..errors import EhatpError, InputError
+from ..errors import (
+    ExecutionError,
+    InputError,
+    PolicyMismatch,
+    UncoveredHumanAction,
+)
 from ..model.formula import conj
 from ..model.grounding import Grounded, ground_problem
 from ..model.htn import Agenda
@@ -48,28 +53,6 @@ if TYPE_CHECKING:
     from ..search.planner import Result
 
 MAX_WORLDS_LISTED = 8
-
-
-class ExecutionError(EhatpError):
-    """The execution cannot go on (wrong turn, or the policy and the problem disagree)."""
-
-
-class PolicyMismatch(ExecutionError):
-    """The policy does not fit the problem: its nodes disagree with the semantics."""
-
-
-class UncoveredHumanAction(ExecutionError):
-    """The human did something the policy has no branch for.
-
-    ``action`` is what was observed, ``expected`` the labels the policy covers here,
-    ``possible`` every move the human model allows here, ``reason`` why it is not covered.
-    """
-
-    def __init__(self, action: str, expected: list[str], possible: list[str],
-                 reason: str) -> None:
-        self.action, self.expected, self.possible, self.reason = action, expected, possible, reason
-        super().__init__(f"{reason}; the policy expects "
-                         + (" or ".join(expected) if expected else "no human action here"))
 
 
 @dataclass(frozen=True)

@@ -30,21 +30,12 @@ from typing import TYPE_CHECKING, Any
 
 import typer
 
-from ..errors import EhatpError
+from ..errors import DomainError, HddlMissing, HddlUnsupported
 from ..model.domain import Domain
 from ..model.problem import BeliefWorld, Limits, Problem
 
 if TYPE_CHECKING:  # unified-planning is optional (ehatp[hddl])
     from unified_planning.model import FNode
-
-
-class HddlUnsupported(EhatpError):
-    """The HDDL input uses something ehatp cannot express; ``str(e)`` is one line saying
-    what (docs/hddl.md lists what maps)."""
-
-
-class HddlMissing(EhatpError):
-    """unified-planning, which reads HDDL, is not installed."""
 
 
 AGENTS = ("robot", "human")
@@ -933,7 +924,6 @@ def check_domain(name: str, domain_file: str | Path, problem_file: str | Path, *
     import time
 
     from ..check.validator import validate
-    from ..model.domain import DomainError
     from ..search.planner import solve
 
     t0 = time.perf_counter()

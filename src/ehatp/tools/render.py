@@ -28,6 +28,7 @@ from typing import Any
 import graphviz  # type: ignore[import-untyped]
 import typer
 
+from ..errors import DotMissing
 from ..model.problem import load
 from ..policy_format import COMM_KINDS, Policy, PolicyMove, PolicyNode
 from .common import Commands, check_policy_problem, die, read_policy, user_errors, write_output
@@ -43,10 +44,6 @@ class Format(StrEnum):
     dot = "dot"
     svg = "svg"
     html = "html"
-
-
-class DotMissing(Exception):
-    """Graphviz's ``dot`` program is not installed."""
 
 
 # --------------------------------------------------------------------------- reading

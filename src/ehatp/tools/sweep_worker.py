@@ -38,7 +38,6 @@ from typing import Any
 from .. import __version__
 from ..check.validator import validate
 from ..errors import EhatpError, InputError
-from ..model.domain import DomainError
 from ..model.problem import loads
 from ..policy_format import num
 from ..search.planner import solve
@@ -123,7 +122,7 @@ def run_instance(task: Task) -> dict[str, Any]:
     except OverBudget:
         row.update(status="error", error_kind="memory",
                    error=f"out of memory: the instance needed more than {budget}")
-    except (InputError, DomainError, EhatpError) as e:
+    except EhatpError as e:
         msg = e.line() if isinstance(e, InputError) else f"{task.instance}: {e}"
         msg = msg.replace(task.path, task.instance)  # name the file as the user did
         row.update(status="error", error_kind="input", error=" ".join(msg.split()))
