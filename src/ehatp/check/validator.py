@@ -41,12 +41,13 @@ from ..model.formula import And, Formula, StateFn, negate
 from ..model.grounding import FINISH, GMethod, GModel, GOp, Grounded, ground_problem
 from ..model.options import InformWhere, Intentions, ObjectiveKind, Passes, Relevance, Speech
 from ..model.problem import Problem
+from ..model.vocabulary import HUMAN, ROBOT, Agent, MoveKind
 from ..policy_format import Policy, PolicyMove, PolicyNode
 
-ROBOT, HUMAN = 0, 1
-ACTION, WAIT, PASS, INFORM, ASK = "action", "wait", "pass", "inform", "ask"
-ANSWER, ANNOUNCE = "answer", "announce"  # the human's answer to the robot's ask; §5
-SILENCE = "silence"  # the robot's silent move at a speech opening (section 5)
+ACTION, WAIT, PASS = MoveKind.ACTION, MoveKind.WAIT, MoveKind.PASS
+INFORM, ASK = MoveKind.INFORM, MoveKind.ASK
+ANSWER, ANNOUNCE = MoveKind.ANSWER, MoveKind.ANNOUNCE  # the human's answer to the robot's ask; §5
+SILENCE = MoveKind.SILENCE  # the robot's silent move at a speech opening (§5)
 COMMUNICATIONS = (INFORM, ASK, ANNOUNCE)  # the moves counted as communications (§5)
 BLOCKED = -2  # the end of a human plan where no action applies (relevance "plan", section 5)
 NOT_DONE = -3  # §5: what a blocked, unfinished robot agenda offers: "the robot is not done"
@@ -98,7 +99,7 @@ class EState:
     forced wait (§4) and whether the human is answering the robot's question (§5), and, at
     the initial robot node of a speech opening, that it is one (§5)."""
 
-    turn: int
+    turn: Agent
     true: int
     robot: Agenda
     humans: frozenset[Agenda]  # A_H, never empty (§3)
@@ -115,8 +116,8 @@ class Step:
     """One move and the node it leads to (``after`` is None when the human acts on a false
     belief: the branch fails)."""
 
-    agent: int
-    kind: str
+    agent: Agent
+    kind: MoveKind
     label: str
     cost: Fraction
     after: EState | None
@@ -656,7 +657,7 @@ class _Semantics:
             return worlds
         return frozenset((s, ()) for s, _ in worlds)
 
-    def advance(self, es: EState, kind: str, true: int, robot: Agenda,
+    def advance(self, es: EState, kind: MoveKind, true: int, robot: Agenda,
                 humans: frozenset[Agenda], worlds: Worlds, k: int,
                 forced: bool = False) -> EState:
         """§3-§4: the node after a move: SA, k reset when co-present, the passive count."""
@@ -666,7 +667,7 @@ class _Semantics:
         passive = es.passive + 1 if kind in (WAIT, PASS) else 0
         if es.opening:  # §5: the opening gives the turn to the human, no passive move counted
             passive = es.passive
-        return EState(1 - es.turn, true, robot, humans, worlds, k, passive, forced)
+        return EState(es.turn.other, true, robot, humans, worlds, k, passive, forced)
 
     def initial(self) -> EState:
         """§1-§3 and §5: the initial node; a robot opening turn when the human starts, the
@@ -684,7 +685,7 @@ class _Semantics:
                 return opening
         return es
 
-    def action_cost(self, agent: int, op: GOp) -> Fraction:
+    def action_cost(self, agent: Agent, op: GOp) -> Fraction:
         model = self.p.domain.robot if agent == ROBOT else self.p.domain.human
         base = model.operators[op.schema].cost
         return _frac(self.p.costs.actions.get(op.schema, base))
@@ -729,7 +730,7 @@ class _Semantics:
     def silence(self, es: EState) -> Step:
         """§5: the robot's silent move at a speech opening (cost 0, no effect)."""
         after = self.advance(es, SILENCE, es.true, es.robot, es.humans, es.worlds, es.k)
-        return Step(ROBOT, SILENCE, SILENCE, Fraction(0), after)
+        return Step(ROBOT, SILENCE, "silence", Fraction(0), after)
 
     def literals(self, t: int, units: Iterable[int]) -> tuple[str, ...]:
         return tuple(self.say(t, u) for u in units)
@@ -1643,12 +1644,12 @@ class _Validator:
                       f"{self.name(st.agent)!r}")
             return False
         if move.kind != st.kind:
-            self.fail(cpath, f"{where}: kind is {move.kind!r}, expected {st.kind!r}")
+            self.fail(cpath, f"{where}: kind is {move.kind!r}, expected {str(st.kind)!r}")
             return False
         want_call = self.call(st)
         if (move.name, list(move.args)) != want_call:
             self.fail(cpath, f"{where}: name and args are {move.name!r} {list(move.args)}, "
-                      f"expected {want_call[0]!r} {want_call[1]}")
+                      f"expected {str(want_call[0])!r} {want_call[1]}")
             return False
         if list(move.told) != list(st.told):
             self.fail(cpath, f"{where}: told is {list(move.told)}, but the move says "
@@ -1845,7 +1846,7 @@ class _Validator:
         ties = got.get("ties")
         if ties is not None and list(ties) != list(want.ties):
             self.fail([], f"policy objective ties are {list(ties)}, but the problem's are "
-                      f"{list(want.ties)} (section 7)")
+                      f"{[str(t) for t in want.ties]} (section 7)")
 
     def check_summary(self, order: list[int] | None) -> None:
         pol = self.policy

@@ -19,10 +19,13 @@ from ..model.grounding import FINISH, GOp, Grounded, no_check
 from ..model.htn import Agenda, Networks, Refiner
 from ..model.options import InformWhere, Intentions, Passes, Relevance, Speech
 from ..model.problem import Cost
+from ..model.vocabulary import Agent, MoveKind
 from .state import HUMAN, ROBOT, EState, World, Worlds, normalize, states_of
 
-ACTION, WAIT, PASS, INFORM, ASK, SILENCE = "action", "wait", "pass", "inform", "ask", "silence"
-ANSWER, ANNOUNCE = "answer", "announce"  # the human's answer to the robot; the robot's intention
+# the move kinds by their old names (aliases of the enum's members)
+ACTION, WAIT, PASS = MoveKind.ACTION, MoveKind.WAIT, MoveKind.PASS
+INFORM, ASK, SILENCE = MoveKind.INFORM, MoveKind.ASK, MoveKind.SILENCE
+ANSWER, ANNOUNCE = MoveKind.ANSWER, MoveKind.ANNOUNCE  # the human's answer; the robot's agenda
 PASSIVE = (WAIT, PASS)
 BLOCKED, HORIZON = -2, -3  # ends of a human plan other than FINISH (relevance "plan")
 NOT_DONE = -4  # what a world whose robot agenda is blocked lets the human expect (§5)
@@ -35,8 +38,8 @@ class Move:
     """One option of the agent to move: an OR choice for the robot, an AND branch for the
     human. ``child`` is None when the move fails (the human acts on a false belief)."""
 
-    agent: int
-    kind: str
+    agent: Agent
+    kind: MoveKind
     label: str
     cost: Cost
     child: EState | None
@@ -324,7 +327,7 @@ class Semantics:
         t, cop = es.true, self.copresent(es.true)
         if es.opening:
             after = es._replace(turn=HUMAN, opening=False)
-            opening = [Move(ROBOT, SILENCE, SILENCE, 0, after)]
+            opening = [Move(ROBOT, SILENCE, "silence", 0, after)]
             for mask in self.informing_sets(es):
                 opening.append(Move(ROBOT, INFORM, self.inform_label(t, mask), self.costs.inform,
                                     self.inform(after._replace(turn=ROBOT), mask), atoms=mask))

@@ -15,15 +15,14 @@ from collections.abc import Iterable
 from typing import NamedTuple
 
 from ..model.htn import Agenda
-
-ROBOT, HUMAN = 0, 1
+from ..model.vocabulary import HUMAN, ROBOT, Agent
 
 World = tuple[int, Agenda]
 Worlds = tuple[World, ...]
 
 
 class EState(NamedTuple):
-    turn: int
+    turn: Agent  # whose move it is (§4)
     true: int
     robot_agenda: Agenda
     human_agendas: tuple[Agenda, ...]  # A_H: sorted, distinct, never empty (§3)
@@ -43,3 +42,6 @@ def normalize(worlds: Iterable[World]) -> Worlds:
 def states_of(worlds: Worlds) -> tuple[int, ...]:
     """The distinct world states, sorted."""
     return tuple(sorted({s for s, _ in worlds}))
+
+
+__all__ = ["HUMAN", "ROBOT", "EState", "World", "Worlds", "normalize", "states_of"]

@@ -67,8 +67,21 @@ OPTION_KEYS: dict[str, frozenset[str]] = {
                                 "plan_horizon", "robot_asks", "announce"}),
     "objective": frozenset({"kind", "weights", "ties"}),
 }
-TIE_KEYS = ("communications", "waits", "length", "worst-case", "expected")
-DEFAULT_TIES = ("communications", "waits", "length")
+
+
+class TieKey(StrEnum):
+    """A tie-break among robot options of equal value (§7, "Ties"), as ``[objective] ties``
+    names it."""
+
+    COMMUNICATIONS = "communications"  # fewer inform/ask/announce moves, and moves said with one
+    WAITS = "waits"  # fewer human passes made waiting
+    LENGTH = "length"  # a shorter average branch
+    WORST_CASE = "worst-case"  # a smaller worst-case cost
+    EXPECTED = "expected"  # a smaller expected cost
+
+
+TIE_KEYS = tuple(TieKey)
+DEFAULT_TIES = (TieKey.COMMUNICATIONS, TieKey.WAITS, TieKey.LENGTH)
 
 
 @dataclass(frozen=True)
@@ -105,7 +118,7 @@ class Objective:
     kind: ObjectiveKind = ObjectiveKind.WORST_CASE
     # relative weights of human moves for "expected", keyed by move label or action name
     weights: Mapping[str, Fraction] = field(default_factory=dict)
-    ties: tuple[str, ...] = DEFAULT_TIES
+    ties: tuple[TieKey, ...] = DEFAULT_TIES
 
     def weight(self, label: str, name: str) -> Fraction:
         """A human move's relative weight: by its label, else its action name, else 1."""
@@ -199,10 +212,11 @@ def read_options(r: _Reader, data: Mapping[str, Any]
                     "give distinct names from " + ", ".join(f'"{t}"' for t in TIE_KEYS),
                     "ties")
     objective = Objective(_choice(r, "objective", o, "kind", ObjectiveKind,
-                                  ObjectiveKind.WORST_CASE), weights, tuple(ties))
+                                  ObjectiveKind.WORST_CASE), weights,
+                          tuple(TieKey(t) for t in ties))
     return human, comm, objective, tuple(notes)
 
 
 __all__ = ["DEFAULT_TIES", "OPTION_KEYS", "TIE_KEYS", "Communication", "HumanModel", "InformWhere",
            "Intentions", "Objective", "ObjectiveKind", "Passes", "Relevance", "Speech",
-           "read_options"]
+           "TieKey", "read_options"]

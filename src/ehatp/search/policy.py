@@ -7,7 +7,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ..epistemic.semantics import ACTION, WAIT, Move, bits_of
-from ..epistemic.state import ROBOT, EState
+from ..epistemic.state import HUMAN, ROBOT, EState
 from ..model.htn import Agenda
 from ..model.options import Objective, ObjectiveKind
 from ..model.problem import Cost
@@ -103,7 +103,7 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
         x.value = own[x.id]
     objective = {"kind": obj.kind.value,
                  "weights": {k: num(v) for k, v in sorted(obj.weights.items())},
-                 "ties": list(obj.ties)}
+                 "ties": [str(t) for t in obj.ties]}
     policy = Policy(problem_name, p.domain.name, {"robot": r_name, "human": h_name}, p.K,
                     costs, nodes, own[0], 0, 0, optimal, stats or {}, list(p.after), objective,
                     worst[0], mean[0])
@@ -256,7 +256,7 @@ def explain_failure(gr: Graph, root: int) -> str:
     def real(text: str) -> str:
         return sym.label(tau, text) if sym is not None else text
 
-    names = (sem.names[0], sem.names[1])
+    names = sem.names
     path: list[str] = []
     seen = {root}
     n = root
@@ -269,17 +269,17 @@ def explain_failure(gr: Graph, root: int) -> str:
         if gr.is_robot(n):
             nxt = next((e for e in edges if e.child not in seen), None)
             if nxt is None:
-                return _why(path, f"every option of {names[0]} leads back to an earlier state")
+                return _why(path, f"every option of {names[ROBOT]} leads back to an earlier state")
         else:
             bad = [e for e in edges if e.child < 0 or not gr.solved[e.child]]
             fail = next((e for e in bad if e.child < 0), None)
             if fail is not None:
-                path.append(f"{names[1]} {real(fail.move.label)}")
+                path.append(f"{names[HUMAN]} {real(fail.move.label)}")
                 return _why(path, real(fail.move.failure))
             nxt = next((e for e in bad if e.child not in seen), None)
             if nxt is None:
                 return _why(path, "every human choice here loops back to an earlier state")
-        agent = names[0] if nxt.move.agent == ROBOT else names[1]
+        agent = names[nxt.move.agent]
         path.append(f"{agent} {real(nxt.move.label)}")
         if sym is not None:
             tau = sym.compose(tau, sym.inverse(nxt.perm))

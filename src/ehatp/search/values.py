@@ -37,6 +37,7 @@ from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from ..epistemic.semantics import ACTION, ANNOUNCE, ASK, INFORM, WAIT, Move
+from ..epistemic.state import ROBOT
 from ..model.options import Objective, ObjectiveKind
 from ..model.problem import Cost
 
@@ -130,7 +131,7 @@ def knuth(gr: Graph, budget: Budget | None = None) -> tuple[list[Cost | float], 
     for n in range(n_nodes):
         if status[n] == GOAL:
             heap.append((0, n))
-        elif states[n].turn != 0:  # a human node
+        elif states[n].turn != ROBOT:  # a human node
             edges = edges_of[n]
             remaining[n] = len(edges) if edges and all(e.child >= 0 for e in edges) else -1
         if budget is not None and not n & CHECK_EVERY:
@@ -149,7 +150,7 @@ def knuth(gr: Graph, budget: Budget | None = None) -> tuple[list[Cost | float], 
         for p in set(gr.parents(n)):
             if final[p]:
                 continue
-            robot = states[p].turn == 0
+            robot = states[p].turn == ROBOT
             for e in edges_of[p]:
                 if e.child != n:
                     continue
@@ -215,7 +216,7 @@ class LiveWorst:
         if gr.status[n] == self.goal:
             return 0
         edges = gr.edges[n]
-        if gr.states[n].turn == 0:  # robot: the best option
+        if gr.states[n].turn == ROBOT:  # robot: the best option
             best: Cost | float = INF
             for e in edges:
                 if e.child >= 0:
@@ -246,7 +247,7 @@ class LiveWorst:
             for p in set(gr.parents(x)):
                 if not edges_of[p]:
                     continue
-                if states[p].turn == 0:
+                if states[p].turn == ROBOT:
                     cand: Cost | float = INF
                     for e in edges_of[p]:
                         if e.child == x and e.move.cost + v < cand:
@@ -431,7 +432,7 @@ def _choose(gr: Graph, order: list[int], allowed: Callable[[int, int], bool], ob
                 mean[n] = 0
             continue
         edges = gr.edges[n]
-        if states[n].turn == 0:  # robot: the best allowed option
+        if states[n].turn == ROBOT:  # robot: the best allowed option
             best_i = -1
             best_v: Cost = 0
             best_k: tuple[object, ...] | None = None
