@@ -1,0 +1,144 @@
+"""The fixture layer every test file shares: the shipped examples with the figures solving them
+gives, and solved policies cached for the whole session.
+
+- :data:`EXAMPLES` is the one registry of ``examples/**/*.toml`` (``tests/test_examples.py``
+  checks it lists every file and that each solves to its figures): worst-case cost,
+  communications, leaves and |W| for all; for the nine rows of the paper's Table 1 also K,
+  the states generated and distinct (the README's table) and the paper's own figures.
+  Parametrise over it with ``@pytest.mark.parametrize("example", EXAMPLES, ids=str)``.
+- :func:`solved` solves a problem file once per session (an example, by name or path, or any
+  other file such as ``tests/data/cubes-8.toml``) and hands each caller its own copies: a
+  freshly loaded problem, a deep copy of the policy and of the statistics. A test may change
+  what it gets without changing what the next test sees.
+
+Hand-built problems whose answers are derived by hand are in ``tests/scenarios.py``.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+from dataclasses import dataclass
+from pathlib import Path
+from typing import NamedTuple
+
+import ehatp
+from ehatp import Policy, Problem, Result
+
+ROOT = Path(__file__).resolve().parent.parent
+EXAMPLES_DIR = ROOT / "examples"
+DATA = Path(__file__).resolve().parent / "data"
+
+
+@dataclass(frozen=True)
+class Table1:
+    """An example's row of the paper's Table 1: ours (with the default symmetry reduction) and
+    the paper's published figures."""
+
+    instance: str  # "P2", "Cooking 1": the name `ehatp bench table1` prints
+    K: int
+    generated: int  # states generated (the README's "states")
+    distinct: int  # distinct states
+    paper_states: int
+    paper_worlds: int
+    paper_leaves: int
+
+
+@dataclass(frozen=True)
+class Example:
+    """A shipped problem file and what ``ehatp.solve`` gives on it with its own options."""
+
+    name: str  # below examples/, without ".toml": "cubes/p2"
+    cost: int  # worst case (every shipped example minimises it)
+    communications: int
+    leaves: int
+    worlds: int  # |W|: the most worlds the human entertains at once (stats["max_worlds"])
+    table1: Table1 | None = None
+
+    @property
+    def path(self) -> Path:
+        return EXAMPLES_DIR / f"{self.name}.toml"
+
+    @property
+    def stem(self) -> str:
+        return self.name.rsplit("/", 1)[-1]
+
+    @property
+    def folder(self) -> str:
+        return self.name.split("/", 1)[0]
+
+    def __str__(self) -> str:  # the test id
+        return self.name
+
+
+def _t1(instance: str, K: int, generated: int, distinct: int, paper: tuple[int, int, int]
+        ) -> Table1:
+    return Table1(instance, K, generated, distinct, *paper)
+
+
+EXAMPLES: tuple[Example, ...] = (
+    Example("communication/late-fatal", 8, 1, 3, 1),
+    Example("communication/other-room", 3, 1, 1, 1),
+    Example("communication/starts-on-false-belief", 6, 1, 3, 1),
+    # Cooking: 2h + 9 with h = 5, 6, 7 human actions (tests/test_cooking.py derives it)
+    Example("cooking/cooking1", 19, 0, 12, 4, _t1("Cooking 1", 2, 256, 175, (603, 3, 5))),
+    Example("cooking/cooking2", 21, 0, 10, 5, _t1("Cooking 2", 3, 300, 212, (1054, 4, 5))),
+    Example("cooking/cooking3", 23, 0, 10, 6, _t1("Cooking 3", 4, 363, 260, (1800, 5, 5))),
+    Example("cubes/p1", 13, 0, 4, 4, _t1("P1", 2, 92, 63, (218, 4, 3))),
+    Example("cubes/p2", 13, 0, 6, 4, _t1("P2", 2, 99, 67, (236, 4, 3))),
+    Example("cubes/p3", 17, 0, 9, 7, _t1("P3", 2, 177, 121, (1643, 7, 6))),
+    Example("cubes/p4", 17, 2, 12, 7, _t1("P4", 2, 204, 133, (2003, 7, 6))),
+    Example("cubes/p5", 21, 0, 6, 13, _t1("P5", 4, 273, 192, (4107, 14, 5))),
+    Example("cubes/p6", 21, 0, 8, 13, _t1("P6", 4, 307, 208, (5607, 14, 5))),
+    Example("cubes/qualitative", 4, 1, 2, 2),
+    Example("cubes/qualitative-ask", 4, 2, 2, 2),
+    Example("cubes/x1-4cubes-k2", 21, 2, 25, 10),
+    Example("cubes/x2-4cubes-k4", 25, 2, 14, 28),
+    Example("sally-anne/defer", 15, 0, 4, 1),
+    Example("sally-anne/inform", 15, 1, 4, 1),
+)
+
+TABLE1: tuple[Example, ...] = tuple(e for e in EXAMPLES if e.table1 is not None)
+CUBES_TABLE1: tuple[Example, ...] = tuple(e for e in TABLE1 if e.folder == "cubes")
+
+
+def example(name: str) -> Example:
+    """The registered example ``name`` ("cubes/p2", or "p2" where that is unambiguous)."""
+    found = [e for e in EXAMPLES if name in (e.name, e.stem)]
+    if len(found) != 1:
+        raise LookupError(f"no single registered example {name!r}")
+    return found[0]
+
+
+class Solved(NamedTuple):
+    """One caller's copies of a solved problem."""
+
+    problem: Problem
+    policy: Policy
+    result: Result  # status, stats, reason, optimal; its .policy is ``policy``
+
+
+_SOLVED: dict[Path, Result] = {}
+
+
+def _path(which: Example | str | Path) -> Path:
+    if isinstance(which, Example):
+        return which.path
+    if isinstance(which, str):
+        return example(which).path
+    return which.resolve()
+
+
+def solved(which: Example | str | Path) -> Solved:
+    """``which`` solved with its own options, once per session; the caller's own copies."""
+    path = _path(which)
+    result = _SOLVED.get(path)
+    if result is None:
+        result = ehatp.solve(ehatp.load(path))
+        assert result.policy is not None, f"{path}: {result.status}: {result.reason}"
+        _SOLVED[path] = result
+    mine = dataclasses.replace(result, policy=copy.deepcopy(result.policy),
+                               stats=copy.deepcopy(result.stats))
+    assert mine.policy is not None
+    return Solved(ehatp.load(path), mine.policy, mine)
+
