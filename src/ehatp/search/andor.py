@@ -30,160 +30,55 @@ computed. State, time and memory limits stop either search (:mod:`.limits`; ``ma
 never exceeded, an expansion that would is not made); the best policy found so far is then
 returned, not proven optimal.
 
-Memory: the graph keeps one :class:`EState` per distinct state, with the worlds tuples and true
-states shared between the nodes that have equal ones; an edge keeps the child's id and a move
-*descriptor* shared by every edge with the same move (its ``child`` state is not kept, except
-for ``inform``, whose description reads the child's true state); per-node flags are bytes.
+The graph itself, its node statuses and edges, are :mod:`.graph`'s.
 """
 
 from __future__ import annotations
 
 import heapq
 import time
-from collections.abc import Callable
 from dataclasses import dataclass
 
-from ..epistemic.semantics import DEAD_PASSIVE_RUN, INFORM, Move, Semantics
-from ..epistemic.state import ROBOT, EState, Worlds
+from ..epistemic.semantics import DEAD_PASSIVE_RUN, Semantics
+from ..epistemic.state import EState
 from ..errors import InputError
 from ..model.grounding import Grounded
 from ..model.options import ObjectiveKind
 from ..model.problem import Cost
 from . import heuristic as _heuristic
+from .graph import (
+    DEAD,
+    EXPANDED,
+    GOAL,
+    KIND_ORDER,
+    NO_EDGES,
+    OPEN,
+    Edge,
+    Graph,
+    NodeStatus,
+    move_key,
+)
 from .heuristic import Bound, Heuristic
-from .limits import Budget, LimitReached
-from .symmetry import Symmetry, SymSemantics, detect
+from .limits import Budget, LimitReached, SolveStatus, start_budget
+from .stats import Progress, Stats
+from .symmetry import SymSemantics, detect
 from .values import LiveWorst, Values, compute_values
 
-OPEN, EXPANDED, GOAL, DEAD = 0, 1, 2, 3
-KIND_ORDER = {"silence": -1, "action": 0, "inform": 1, "announce": 2, "ask": 3, "answer": 4,
-              "wait": 5, "pass": 6}
 Entry = tuple[Bound, Cost, int]  # the queue's: (f, g, node id)
-
-
-@dataclass(slots=True)
-class Edge:
-    """One option (robot) or branch (human) of a node. ``move`` describes the move (shared by
-    the edges of equal moves; its ``child`` state is not kept: None, or for ``inform`` the
-    child node's state); ``child`` is the child node's id, -1 when the move fails. Over
-    symmetry-reduced states (:mod:`.symmetry`), ``perm`` is the renaming (an id) that maps the
-    move's real child to the child node's canonical state; 0 is none."""
-
-    move: Move
-    child: int
-    perm: int = 0
-
-
-NO_EDGES: tuple[Edge, ...] = ()
-
-
-@dataclass
-class Stats:
-    generated: int = 0  # epistemic states generated (children created, duplicates included)
-    distinct: int = 0  # distinct epistemic states
-    expanded: int = 0
-    max_worlds: int = 0  # largest |W| (the designated world is not counted separately)
-    time_s: float = 0.0
-    # for progress displays only (not reported): the work under way and the search frontier
-    phase: str = "search"
-    frontier: int = 0
-
-    def as_dict(self) -> dict[str, int | float]:
-        return {"generated": self.generated, "distinct": self.distinct,
-                "expanded": self.expanded, "max_worlds": self.max_worlds,
-                "time_ms": round(self.time_s * 1000, 1)}
-
-
-class Graph:
-    """The explored AND/OR graph, as parallel per-node arrays indexed by node id."""
-
-    def __init__(self, sem: Semantics) -> None:
-        self.sem = sem
-        self.states: list[EState] = []
-        self.index: dict[EState, int] = {}
-        self.status = bytearray()  # OPEN, EXPANDED, GOAL or DEAD
-        self.dead_why: dict[int, str] = {}
-        self.edges: list[tuple[Edge, ...]] = []  # in canonical move order, once expanded
-        # the parents, one entry per edge into the node: -1 for none, a node id for one, a
-        # list beyond (most nodes have one parent)
-        self._parents: list[int | list[int]] = []
-        self.g: list[Cost] = []
-        # §6: each node's least number of moves from the root over the paths found so far
-        self.depth: list[int] = []
-        self.depth_cut: set[int] = set()  # dead ends made by the depth limit alone
-        self.solved = bytearray()
-        self.pending: list[int] = []  # human nodes: unsolved edges left
-        self._worlds: dict[Worlds, Worlds] = {}
-        self._trues: dict[int, int] = {}
-        self._moves: dict[tuple[object, ...], Move] = {}
-        # search over canonical states (docs/semantics.md §3, "Symmetry"): the renamings, and
-        # the one mapping the real root to the root node's state
-        self.sym: Symmetry | None = None
-        self.root_perm = 0
-
-    def add(self, es: EState, g: Cost, depth: int, parent: int = -1) -> int:
-        """A new node for ``es`` (worlds and true state shared with equal ones)."""
-        w = self._worlds.setdefault(es.worlds, es.worlds)
-        t = self._trues.setdefault(es.true, es.true)
-        if w is not es.worlds or t is not es.true:
-            es = es._replace(true=t, worlds=w)
-        i = len(self.states)
-        self.states.append(es)
-        self.index[es] = i
-        self.status.append(OPEN)
-        self.edges.append(NO_EDGES)
-        self._parents.append(parent)
-        self.g.append(g)
-        self.depth.append(depth)
-        self.solved.append(0)
-        self.pending.append(0)
-        return i
-
-    def add_parent(self, c: int, p: int) -> None:
-        ps = self._parents[c]
-        if isinstance(ps, list):
-            ps.append(p)
-        elif ps < 0:
-            self._parents[c] = p
-        else:
-            self._parents[c] = [ps, p]
-
-    def parents(self, n: int) -> list[int]:
-        """One entry per edge into ``n`` (a parent with two edges to ``n`` is there twice)."""
-        ps = self._parents[n]
-        if isinstance(ps, list):
-            return ps
-        return [] if ps < 0 else [ps]
-
-    def descriptor(self, m: Move, child: int) -> Move:
-        """``m`` without its child state, shared between equal moves (see :class:`Edge`)."""
-        if (m.kind == INFORM or m.atoms) and child >= 0:  # what is told reads the child's T
-            return Move(m.agent, m.kind, m.label, m.cost, self.states[child], m.op, m.atoms,
-                        m.failure, m.waits)
-        key = (m.agent, m.kind, m.label, m.cost, m.op, m.atoms, m.failure, m.waits)
-        d = self._moves.get(key)
-        if d is None:
-            d = self._moves[key] = Move(m.agent, m.kind, m.label, m.cost, None, m.op, m.atoms,
-                                        m.failure, m.waits)
-        return d
-
-    def is_robot(self, n: int) -> bool:
-        return self.states[n].turn == ROBOT
 
 
 @dataclass
 class SearchOutcome:
+    """What :func:`search` found: the graph and its root, the statistics, how the search
+    ended, the values when the root is solved, and whether the optimum is proven."""
+
     graph: Graph
     root: int
     stats: Stats
-    # "solved" | "unsolvable" | "timeout" | "state-limit" | "memory-limit" | "depth-limit"
-    status: str
+    status: SolveStatus
     values: Values | None
     optimal: bool
     reason: str = ""  # which limit stopped the search, in words
-
-
-Progress = Callable[[Stats, int], None]
 
 
 def search(grounded: Grounded, *, timeout: float | None = None, max_states: int | None = None,
@@ -201,118 +96,202 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
     states (docs/semantics.md §3, "Symmetry"; :mod:`.symmetry`); when a decision taken by
     index or name order makes that unsound the search stops with status
     ``"symmetry-unsafe"`` (the planner then solves again without it). ``heuristic`` (default:
-    on, unless :data:`.heuristic.OVERRIDE` says otherwise) orders a worst-case search by
-    ``g + h`` (:mod:`.heuristic`); the policy is the same either way, fewer states are
-    expanded with it."""
+    on) orders a worst-case search by ``g + h`` (:mod:`.heuristic`); the policy is the same
+    either way, fewer states are expanded with it.
+
+    In GTPyhop-style pseudo-code (``V``: the worst-case values kept up to date, the module's
+    docstring proves the stopping rule)::
+
+        search(problem):
+            root = the initial state after the problem's opening moves (after)
+            queue = [(h(root), 0, root)]; level = 0
+            while queue:
+                (f, g, n) = pop the least
+                if n is expanded, or was reached since by a cheaper path: continue
+                if f > level:
+                    if the root is solved and V(root) < f: return solved, optimal
+                    level = f
+                if a limit is reached: stop (with the best policy so far, if any)
+                expand n: a goal, a dead end, or its moves as edges, new children queued
+                propagate "solved" upwards; from the first goal on, keep V up to date
+            if the root is solved: values over the whole graph, solved
+            elif the depth limit cut a state: depth-limit
+            else: unsolvable
+    """
     limits = grounded.problem.limits
-    max_states = limits.max_states if max_states is None else max_states
-    max_depth = limits.max_depth if max_depth is None else max_depth
     stats = Stats() if stats is None else stats
     started = time.perf_counter()
-    if budget is None:
-        budget = Budget(limits.timeout if timeout is None else timeout,
-                        limits.max_memory if max_memory is None else max_memory)
-    if progress is not None and budget.on_poll is None:
-        def poll(b: Budget) -> None:
-            stats.time_s = b.elapsed()
-            progress(stats, stats.frontier)
-        budget.on_poll = poll
+    budget = start_budget(limits, stats, timeout=timeout, max_memory=max_memory,
+                          budget=budget, progress=progress)
     budget.phase = "search"
-    # worst case: stop as soon as the optimum is proven; expected cost: explore everything
-    early_stop = grounded.problem.objective.kind == ObjectiveKind.WORST_CASE
-    if heuristic is None:
-        heuristic = _heuristic.OVERRIDE is not False
-    hfn = Heuristic(grounded) if early_stop and heuristic else None
-    sym = detect(grounded) if symmetry else None
-    sem = Semantics(grounded) if sym is None else SymSemantics(grounded, sym)
-    sem.bound(budget.check)
-    gr = Graph(sem)
-    root_state = sem.initial()
-    for i, label in enumerate(grounded.problem.after):
+    run = _Search(grounded, budget, stats,
+                  limits.max_states if max_states is None else max_states,
+                  limits.max_depth if max_depth is None else max_depth,
+                  symmetry=symmetry, heuristic=_heuristic.enabled(heuristic))
+    run.run()
+    stats.time_s = time.perf_counter() - started  # the search alone, values included
+    return SearchOutcome(run.graph, run.root, stats, run.status, run.values, run.optimal,
+                         run.reason)
+
+
+class _Search:
+    """One run of :func:`search`, step by step: the root, the exploration in order of ``f``
+    with its stopping rule and limits, then the values."""
+
+    def __init__(self, grounded: Grounded, budget: Budget, stats: Stats, max_states: int,
+                 max_depth: int, *, symmetry: bool, heuristic: bool) -> None:
+        self.budget, self.stats = budget, stats
+        self.max_states, self.max_depth = max_states, max_depth
+        # worst case: stop as soon as the optimum is proven; expected cost: explore everything
+        self.early_stop = grounded.problem.objective.kind == ObjectiveKind.WORST_CASE
+        self.hfn = Heuristic(grounded) if self.early_stop and heuristic else None
+        sym = detect(grounded) if symmetry else None
+        self.sem = Semantics(grounded) if sym is None else SymSemantics(grounded, sym)
+        self.sem.bound(budget.check)
+        self.graph = Graph(self.sem)
+        self.root = self._add_root(self._opening(grounded))
+        # by f = g + h, then g (within a level as the uniform-cost search would: shallow
+        # first), then node id (creation order)
+        root_state = self.graph.states[self.root]
+        self.heap: list[Entry] = [(self.hfn(root_state) if self.hfn is not None else 0, 0,
+                                   self.root)]
+        self.level: Bound = 0
+        self.status, self.reason = SolveStatus.UNSOLVABLE, ""
+        self.values: Values | None = None
+        self.optimal = False
+        self.live: LiveWorst | None = None  # worst-case values, kept from the first goal on
+
+    def _opening(self, grounded: Grounded) -> EState:
+        """Return the root's state: the initial state after the problem's opening moves
+        (``[problem] after``, §4: each a move possible at that point)."""
+        sem = self.sem
+        root_state = sem.initial()
+        for i, label in enumerate(grounded.problem.after):
+            try:
+                root_state = sem.follow(root_state, label).child  # type: ignore[assignment]
+            except ValueError as e:
+                raise InputError(grounded.problem.source, f"[problem] after, step {i + 1}",
+                                 str(e), "give a move possible at that point") from None
+        return root_state
+
+    def _add_root(self, root_state: EState) -> int:
+        """Return the root node's id: ``root_state``, or its canonical form over
+        symmetry-reduced states (§3, the renaming kept to map the policy back)."""
+        sem, gr, stats = self.sem, self.graph, self.stats
+        if isinstance(sem, SymSemantics):
+            sem.unsafe = ""  # the root is a real state: its own decisions are the real ones
+            gr.sym = sem.sym
+            root_state, gr.root_perm = sem.sym.canon(root_state)
+        root = gr.add(root_state, 0, 0)
+        stats.generated = stats.distinct = 1
+        stats.max_worlds = len(root_state.worlds)
+        return root
+
+    def run(self) -> None:
+        """Explore, then compute the values; a limit met in either, or a
+        :class:`MemoryError`, is a clean stop (no values from a half-updated graph)."""
         try:
-            root_state = sem.follow(root_state, label).child  # type: ignore[assignment]
-        except ValueError as e:
-            raise InputError(grounded.problem.source, f"[problem] after, step {i + 1}", str(e),
-                             "give a move possible at that point") from None
-    if isinstance(sem, SymSemantics):
-        sem.unsafe = ""  # the root is a real state: its own decisions are the real ones
-        gr.sym = sem.sym
-        root_state, gr.root_perm = sem.sym.canon(root_state)
-    root = gr.add(root_state, 0, 0)
-    stats.generated = stats.distinct = 1
-    stats.max_worlds = len(root_state.worlds)
-    # by f = g + h, then g (within a level as the uniform-cost search would: shallow first),
-    # then node id (creation order)
-    f0 = hfn(root_state) if hfn is not None else 0
-    heap: list[Entry] = [(f0, 0, root)]
-    level: Bound = 0
-    status, reason = "unsolvable", ""
-    values: Values | None = None
-    optimal = False
-    live: LiveWorst | None = None  # worst-case values, kept from the first goal on
-    try:
+            if self._explore():
+                self._end_of_graph()
+            self._values()
+        except LimitReached as e:
+            self.status, self.reason, self.values, self.optimal = e.status, e.reason, None, False
+        except MemoryError:
+            self.live = self.values = None
+            oom = self.budget.out_of_memory()
+            self.status, self.reason, self.optimal = oom.status, oom.reason, False
+
+    def _stop(self, status: SolveStatus, reason: str = "", optimal: bool = False) -> bool:
+        """Record how the search ends; return True (the loop stops)."""
+        self.status, self.reason, self.optimal = status, reason, optimal
+        return True
+
+    def _explore(self) -> bool:
+        """Expand nodes in order of ``(f, g, id)`` until the stopping rule or a limit ends
+        the search (False), or nothing is left to expand (True)."""
+        gr, heap = self.graph, self.heap
+        heappop = heapq.heappop
         while heap:
-            f, g, n = heapq.heappop(heap)
+            f, g, n = heappop(heap)
             if gr.status[n] != OPEN or g > gr.g[n]:
                 continue  # expanded already, or reached since by a cheaper path
-            if f > level:
-                # every node with f < this one's is expanded: the optimum is proven when the
-                # root's value is below it (see the module's docstring)
-                if live is not None and gr.solved[root] and live.root_value(root) < f:
-                    status, optimal = "solved", True
-                    break
-                level = f
-            stats.frontier = len(heap)
-            stop = budget.search_should_stop(stats.distinct, bool(gr.solved[root]))
-            if stop is not None:
-                status, reason = stop.status, stop.reason
-                break
-            if stats.distinct >= max_states:
-                status, reason = "state-limit", f"state limit reached ({stats.distinct} " \
-                                                "distinct states)"
-                break
-            _expand(gr, n, heap, stats, max_depth, hfn, max_states)
-            if gr.status[n] == OPEN:  # one more state than the limit: n left unexpanded
-                status, reason = "state-limit", f"state limit reached ({stats.distinct} " \
-                                                "distinct states)"
-                break
-            if isinstance(sem, SymSemantics) and sem.unsafe:
-                status, reason = "symmetry-unsafe", sem.unsafe
-                break
-            if live is not None:
-                live.expanded(n)
-            elif early_stop and gr.status[n] == GOAL:
-                # from the first goal on, not only once the root is solved: a search ordered
-                # by g + h often solves the root by its very last expansions
-                budget.phase = "search (first worst-case pass)"
-                live = LiveWorst(gr, budget)
-                budget.phase = "search"
-        else:
-            if gr.solved[root]:
-                values = compute_values(gr, root, budget=budget)
-                status, optimal = "solved", values.exact
-            elif gr.depth_cut:  # §6: a limit, not a proof that no policy exists
-                status = "depth-limit"
-                reason = (f"depth limit reached ({len(gr.depth_cut)} states cut at "
-                          f"{max_depth} moves) before a policy was found; raise "
-                          "[limits] max_depth or --max-depth")
-        if status in ("timeout", "state-limit", "memory-limit") and gr.solved[root]:
-            values = compute_values(gr, root, budget=budget)  # best so far, not optimal
-        elif status == "solved" and values is None:
-            live = None  # its arrays are not needed any more
-            values = compute_values(gr, root, budget=budget)
-    except LimitReached as e:
-        status, reason, values, optimal = e.status, e.reason, None, False
-    except MemoryError:  # the graph may be half-updated: no values from it
-        live = values = None
-        oom = budget.out_of_memory()
-        status, reason, optimal = oom.status, oom.reason, False
-    stats.time_s = time.perf_counter() - started  # the search alone, values included
-    return SearchOutcome(gr, root, stats, status, values, optimal, reason)
+            if f > self.level:
+                if self._proven(f):
+                    return False
+                self.level = f
+            if self._limit_reached():
+                return False
+            _expand(gr, n, heap, self.stats, self.max_depth, self.hfn, self.max_states)
+            if self._after_expansion(n):
+                return False
+        return True
 
+    def _proven(self, f: Bound) -> bool:
+        """The stopping rule (the module's docstring): every node with a smaller ``f`` is
+        expanded, so the optimum is proven when the root's value is below ``f``."""
+        live, root = self.live, self.root
+        if live is not None and self.graph.solved[root] and live.root_value(root) < f:
+            return self._stop(SolveStatus.SOLVED, optimal=True)
+        return False
 
-def _move_key(m: Move) -> tuple[object, ...]:
-    return (KIND_ORDER[m.kind], m.label, m.child is None, m.child or ())
+    def _limit_reached(self) -> bool:
+        """Whether time, memory (with what must follow the search) or ``max_states`` stop the
+        search before the next expansion (§7, "Search"; :mod:`.limits`)."""
+        stats = self.stats
+        stats.frontier = len(self.heap)
+        stop = self.budget.search_should_stop(stats.distinct,
+                                              bool(self.graph.solved[self.root]))
+        if stop is not None:
+            return self._stop(stop.status, stop.reason)
+        if stats.distinct >= self.max_states:
+            return self._stop(SolveStatus.STATE_LIMIT, self._state_limit())
+        return False
+
+    def _state_limit(self) -> str:
+        return f"state limit reached ({self.stats.distinct} distinct states)"
+
+    def _after_expansion(self, n: int) -> bool:
+        """After expanding ``n``: stop at the state limit (``n`` was left unexpanded) or an
+        order-dependent decision (§3, "Symmetry"); else keep the worst-case values up to
+        date, from the first goal on. Whether the search stops."""
+        gr, sem = self.graph, self.sem
+        if gr.status[n] == OPEN:  # one more state than the limit: n left unexpanded
+            return self._stop(SolveStatus.STATE_LIMIT, self._state_limit())
+        if isinstance(sem, SymSemantics) and sem.unsafe:
+            return self._stop(SolveStatus.SYMMETRY_UNSAFE, sem.unsafe)
+        if self.live is not None:
+            self.live.expanded(n)
+        elif self.early_stop and gr.status[n] == GOAL:
+            # from the first goal on, not only once the root is solved: a search ordered
+            # by g + h often solves the root by its very last expansions
+            self.budget.phase = "search (first worst-case pass)"
+            self.live = LiveWorst(gr, self.budget)
+            self.budget.phase = "search"
+        return False
+
+    def _end_of_graph(self) -> None:
+        """Everything reachable is expanded: solved (the values say whether optimal), cut by
+        the depth limit (§6: a limit, not a proof that no policy exists), or unsolvable."""
+        gr, root = self.graph, self.root
+        if gr.solved[root]:
+            self.values = compute_values(gr, root, budget=self.budget)
+            self._stop(SolveStatus.SOLVED, optimal=self.values.exact)
+        elif gr.depth_cut:
+            self._stop(SolveStatus.DEPTH_LIMIT,
+                       f"depth limit reached ({len(gr.depth_cut)} states cut at "
+                       f"{self.max_depth} moves) before a policy was found; raise "
+                       "[limits] max_depth or --max-depth")
+
+    def _values(self) -> None:
+        """The values, where the explored graph has them and :meth:`_end_of_graph` did not
+        compute them: after the stopping rule, or the best policy so far after a limit."""
+        gr, root = self.graph, self.root
+        if self.status in (SolveStatus.TIMEOUT, SolveStatus.STATE_LIMIT,
+                           SolveStatus.MEMORY_LIMIT) and gr.solved[root]:
+            self.values = compute_values(gr, root, budget=self.budget)  # not optimal
+        elif self.status == SolveStatus.SOLVED and self.values is None:
+            self.live = None  # its arrays are not needed any more
+            self.values = compute_values(gr, root, budget=self.budget)
 
 
 def _expand(gr: Graph, n: int, heap: list[Entry], stats: Stats, max_depth: int,
@@ -335,7 +314,7 @@ def _expand(gr: Graph, n: int, heap: list[Entry], stats: Stats, max_depth: int,
         gr.status[n], gr.dead_why[n] = DEAD, f"depth limit {max_depth} reached"
         gr.depth_cut.add(n)
         return
-    moves = sorted(sem.moves(es), key=_move_key)
+    moves = sorted(sem.moves(es), key=move_key)
     g0, d0 = gr.g[n], gr.depth[n] + 1
     index, gs, status, states = gr.index, gr.g, gr.status, gr.states
     heappush = heapq.heappush
@@ -435,3 +414,7 @@ def _mark_solved(gr: Graph, n: int) -> None:
                 if gr.pending[p] == 0:
                     gr.solved[p] = 1
                     stack.append(p)
+
+
+__all__ = ["DEAD", "EXPANDED", "GOAL", "KIND_ORDER", "NO_EDGES", "OPEN", "Edge", "Graph",
+           "NodeStatus", "Progress", "SearchOutcome", "Stats", "search"]

@@ -16,7 +16,7 @@ from ..epistemic.semantics import DEAD_PASSIVE_RUN
 from ..model.formula import FALSE, TRUE, And, Formula, GAtom, Not
 from ..model.grounding import FINISH, Grounded
 from ..model.problem import call_str
-from .andor import DEAD, OPEN, Graph
+from .graph import DEAD, OPEN, Graph
 
 MAX_SHOWN = 120  # characters of a ground goal part; a whole expanded formula would not read
 

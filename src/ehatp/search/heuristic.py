@@ -64,6 +64,7 @@ in order of ``f``, each with its cheapest ``g`` (see :mod:`.andor` for the stopp
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from fractions import Fraction
 
@@ -77,8 +78,22 @@ INF = float("inf")
 Bound = Cost | float  # a cost, or INF: no way to finish
 
 OVERRIDE: bool | None = None
-"""When not None, turns the heuristic on (True) or off (False) in every worst-case search whose
-caller does not say (tests and benchmarks compare runs with and without it)."""
+"""Deprecated, goes in the next release: pass ``heuristic=`` to ``solve`` or ``search``
+instead. When not None, turns the heuristic on (True) or off (False) in every worst-case search
+whose caller does not say."""
+
+
+def enabled(heuristic: bool | None) -> bool:
+    """Return whether a worst-case search orders its nodes by ``g + h``: ``heuristic`` when
+    the caller says, else yes (unless the deprecated :data:`OVERRIDE` says otherwise)."""
+    if heuristic is not None:
+        return heuristic
+    if OVERRIDE is not None:
+        warnings.warn("ehatp.search.heuristic.OVERRIDE is deprecated and goes in the next "
+                      "release: pass heuristic=True/False to solve() or search()",
+                      DeprecationWarning, stacklevel=3)
+        return OVERRIDE
+    return True
 
 
 def least_costs(model: AgentModel, price: Callable[[Operator], Cost]) -> dict[str, Bound]:
@@ -196,4 +211,4 @@ class Heuristic:
         return r
 
 
-__all__ = ["INF", "OVERRIDE", "Bound", "Heuristic", "least_costs"]
+__all__ = ["INF", "OVERRIDE", "Bound", "Heuristic", "enabled", "least_costs"]

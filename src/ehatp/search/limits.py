@@ -21,8 +21,10 @@ import os
 import sys
 import time
 from collections.abc import Callable
+from enum import StrEnum
 
-from ..model.problem import parse_size
+from ..model.problem import Limits, parse_size
+from .stats import Progress, Stats
 
 POLL_S = 0.05  # how often the clock and the resident set size are looked at
 GRACE_FRACTION, GRACE_S = 0.05, 0.5  # the hard deadline: timeout * 1.05 + 0.5 s
@@ -32,7 +34,26 @@ POST_S_PER_STATE = 12e-6
 POST_BYTES_PER_STATE = 220
 MEMORY_HEADROOM = 0.95  # the search stops when it would pass this fraction of max_memory
 
-TIMEOUT, MEMORY = "timeout", "memory-limit"
+
+
+class SolveStatus(StrEnum):
+    """How a solve ended (``Result.status``; the JSON and the command line write the value)."""
+
+    SOLVED = "solved"  # a policy, proven optimal or not (``Result.optimal``)
+    UNSOLVABLE = "unsolvable"  # no policy exists
+    TIMEOUT = "timeout"
+    STATE_LIMIT = "state-limit"
+    MEMORY_LIMIT = "memory-limit"
+    DEPTH_LIMIT = "depth-limit"  # no policy within max_depth moves (not a proof there is none)
+    # the search over canonical states met a decision taken by name or index order: the
+    # planner solves again without symmetry (never the status of a result)
+    SYMMETRY_UNSAFE = "symmetry-unsafe"
+
+
+LIMITS = (SolveStatus.TIMEOUT, SolveStatus.STATE_LIMIT, SolveStatus.MEMORY_LIMIT,
+          SolveStatus.DEPTH_LIMIT)
+"""The statuses of a solve a limit stopped."""
+TIMEOUT, MEMORY = SolveStatus.TIMEOUT, SolveStatus.MEMORY_LIMIT
 
 
 def format_size(n: int) -> str:
@@ -68,7 +89,7 @@ class LimitReached(Exception):
     """A limit stopped the work. ``status`` is ``"timeout"`` or ``"memory-limit"``;
     ``reason`` says which limit, in words."""
 
-    def __init__(self, status: str, reason: str) -> None:
+    def __init__(self, status: SolveStatus, reason: str) -> None:
         super().__init__(reason)
         self.status, self.reason = status, reason
 
@@ -163,5 +184,26 @@ class Budget:
         return LimitReached(MEMORY, f"{what} exhausted (out of memory during {self.phase})")
 
 
-__all__ = ["Budget", "LimitReached", "MEMORY", "TIMEOUT", "format_size", "parse_size",
-           "resident_bytes"]
+def start_budget(limits: Limits, stats: Stats, *, timeout: float | None = None,
+                 max_memory: int | None = None, budget: Budget | None = None,
+                 progress: Progress | None = None) -> Budget:
+    """Return the budget a solve, or a search run on its own, works under -- the one place
+    limits and progress are set up: ``budget`` when the caller shares one, else a new one of
+    ``timeout`` seconds and ``max_memory`` bytes (each defaulting to ``limits``, the problem's
+    ``[limits]``). With ``progress``, a budget without a poll hook gets one that brings
+    ``stats`` up to date (time and phase) and calls ``progress(stats, stats.frontier)``."""
+    if budget is None:
+        budget = Budget(limits.timeout if timeout is None else timeout,
+                        limits.max_memory if max_memory is None else max_memory)
+    if progress is not None and budget.on_poll is None:
+        report = progress
+
+        def poll(b: Budget) -> None:
+            stats.time_s, stats.phase = b.elapsed(), b.phase
+            report(stats, stats.frontier)
+        budget.on_poll = poll
+    return budget
+
+
+__all__ = ["LIMITS", "Budget", "LimitReached", "MEMORY", "SolveStatus", "TIMEOUT",
+           "format_size", "parse_size", "resident_bytes", "start_budget"]

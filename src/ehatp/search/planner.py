@@ -5,23 +5,30 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from ..model.grounding import ground_problem
+from ..model.grounding import Grounded, ground_problem
 from ..model.options import Intentions
 from ..model.problem import Problem
 from ..policy_format import Policy
 from . import symmetry as _symmetry
-from .andor import Progress, Stats, search
+from .andor import SearchOutcome, search
 from .diagnose import diagnose
-from .limits import Budget, LimitReached
+from .limits import LIMITS, Budget, LimitReached, SolveStatus, start_budget
 from .policy import explain_failure, extract, realise
+from .stats import Progress, SolveStats, Stats
+
+INF = float("inf")
 
 
 @dataclass
 class Result:
-    # "solved" | "unsolvable" | "timeout" | "state-limit" | "memory-limit" | "depth-limit"
-    status: str
+    """What :func:`solve` returns. ``status`` compares equal to its string (``"solved"``,
+    ``"unsolvable"``, ``"timeout"``, ``"state-limit"``, ``"memory-limit"``,
+    ``"depth-limit"``); ``policy`` is the best policy found, ``optimal`` whether it is proven
+    optimal, ``reason`` why there is none or why it may not be (in words)."""
+
+    status: SolveStatus
     policy: Policy | None
-    stats: dict[str, Any] = field(default_factory=dict)
+    stats: SolveStats = field(default_factory=lambda: SolveStats())
     reason: str = ""
     optimal: bool = False
 
@@ -30,13 +37,21 @@ class Result:
         return self.policy is not None
 
 
-LIMITS = ("timeout", "state-limit", "memory-limit", "depth-limit")
+@dataclass(frozen=True)
+class _Settings:
+    """A solve's options beyond the problem's: state and depth limits (None: the problem's)
+    and whether to search over canonical states and order by ``g + h``."""
+
+    max_states: int | None
+    max_depth: int | None
+    symmetry: bool
+    heuristic: bool | None
 
 
 def solve(problem: Problem, *, timeout: float | None = None, max_states: int | None = None,
           max_depth: int | None = None, progress: Progress | None = None,
           max_memory: int | None = None, budget: Budget | None = None,
-          symmetry: bool | None = None) -> Result:
+          symmetry: bool | None = None, heuristic: bool | None = None) -> Result:
     """Plan a robot policy for ``problem``, optimal under ``problem.objective``
     (docs/semantics.md §7: worst-case by default, or expected cost).
 
@@ -51,90 +66,138 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
     ``symmetry`` (default: ``[limits] symmetry``) searches over canonical states, the policy
     mapped back to the real objects (docs/semantics.md §3, "Symmetry"); when the reduction
     cannot be trusted for this problem (a decision taken by name or index order, or a move
-    that does not map back) the problem is solved again without it.
+    that does not map back) the problem is solved again without it. ``heuristic`` (default:
+    on) orders a worst-case search by a lower bound (:mod:`.heuristic`): fewer states, the
+    same policy.
+
+    The steps: ground (:func:`_ground`), search (:func:`_search`), map the chosen policy back
+    to the real objects and extract it (:func:`_extract`), then say why there is no policy or
+    why it is not proven optimal (:func:`_reason`).
     """
-    limits = problem.limits
-    if budget is None:
-        budget = Budget(limits.timeout if timeout is None else timeout,
-                        limits.max_memory if max_memory is None else max_memory)
     live = Stats()
-    if progress is not None and budget.on_poll is None:
-        def poll(b: Budget) -> None:
-            live.time_s, live.phase = b.elapsed(), b.phase
-            progress(live, live.frontier)
-        budget.on_poll = poll
-    budget.phase = "grounding"
-    try:
-        grounded = ground_problem(problem, check=budget.check)
-    except LimitReached as e:
-        return Result(e.status, None, {**live.as_dict(), "time_ms": round(budget.elapsed()
-                                                                          * 1000, 1)},
-                      e.reason)
-    except MemoryError:
-        oom = budget.out_of_memory()
-        return Result(oom.status, None, live.as_dict(), oom.reason)
-    if symmetry is None:
-        symmetry = (problem.limits.symmetry if _symmetry.OVERRIDE is None
-                    else _symmetry.OVERRIDE)
-    out = search(grounded, max_states=max_states, max_depth=max_depth, budget=budget,
-                 stats=live, symmetry=symmetry)
-    if out.status == "symmetry-unsafe":
-        _restart(live)
-        out = search(grounded, max_states=max_states, max_depth=max_depth, budget=budget,
-                     stats=live)
-    stats: dict[str, Any] = out.stats.as_dict()
+    budget = start_budget(problem.limits, live, timeout=timeout, max_memory=max_memory,
+                          budget=budget, progress=progress)
+    grounded = _ground(problem, budget, live)
+    if isinstance(grounded, Result):
+        return grounded
+    settings = _Settings(max_states, max_depth, _symmetry.enabled(symmetry, problem.limits),
+                         heuristic)
+    out = _search(grounded, budget, live, settings)
+    stats = out.stats.as_dict()
     stats["atoms"] = len(grounded.atoms)
     status, reason, optimal = out.status, out.reason, out.optimal
     policy = None
-    if out.values is not None and out.values.value[out.root] != float("inf"):
+    if out.values is not None and out.values.value[out.root] != INF:
         public = {k: v for k, v in stats.items() if k != "time_ms"}
-        budget.phase = "extraction"
-        try:
-            budget.check()
-            graph, root, values = out.graph, out.root, out.values
-            if graph.sym is not None:
-                real = realise(graph, root, values, check=budget.check)
-                if isinstance(real, str):  # not expected: solve without symmetry
-                    _restart(live)
-                    return solve(problem, max_states=max_states, max_depth=max_depth,
-                                 budget=budget, symmetry=False)
-                graph, root, values = real
-            policy = extract(graph, root, values, problem_name=problem.name,
-                             optimal=optimal, stats=public, check=budget.check)
-            budget.check()
-        except LimitReached as e:
-            status, reason, optimal, policy = e.status, e.reason, False, None
-        except MemoryError:
-            oom = budget.out_of_memory()
-            status, reason, optimal, policy = oom.status, oom.reason, False, None
-        if policy is not None:
-            stats.update(cost=policy.cost, communications=policy.communications,
-                         leaves=policy.leaves, worst_case=policy.worst_case,
-                         expected=policy.expected)
-    if status == "unsolvable":
+        got = _extract(problem, out, public, budget)
+        if isinstance(got, str):  # not expected: solve without symmetry
+            live.restart()
+            return solve(problem, max_states=max_states, max_depth=max_depth, budget=budget,
+                         symmetry=False, heuristic=heuristic)
+        if isinstance(got, LimitReached):
+            status, reason, optimal = got.status, got.reason, False
+        else:
+            policy = got
+            _policy_stats(stats, policy)
+    reason = _reason(problem, grounded, out, status, reason, optimal, budget, settings)
+    budget.phase = "done"
+    return Result(status, policy, stats, reason, optimal)
+
+
+def _ground(problem: Problem, budget: Budget, live: Stats) -> Grounded | Result:
+    """Return the grounded problem (§1, "Grounding"), or the result of a limit that stopped
+    grounding (partial statistics: none yet, and the time)."""
+    budget.phase = "grounding"
+    try:
+        return ground_problem(problem, check=budget.check)
+    except LimitReached as e:
+        stats = live.as_dict()
+        stats["time_ms"] = round(budget.elapsed() * 1000, 1)
+        return Result(e.status, None, stats, e.reason)
+    except MemoryError:
+        oom = budget.out_of_memory()
+        return Result(oom.status, None, live.as_dict(), oom.reason)
+
+
+def _search(grounded: Grounded, budget: Budget, live: Stats,
+            settings: _Settings) -> SearchOutcome:
+    """Return the search's outcome (§7), over canonical states when ``settings.symmetry``
+    says so, and again over real states when that reduction is unsafe for this problem
+    (§3, "Symmetry": a decision taken by name or index order)."""
+    out = search(grounded, max_states=settings.max_states, max_depth=settings.max_depth,
+                 budget=budget, stats=live, symmetry=settings.symmetry,
+                 heuristic=settings.heuristic)
+    if out.status == SolveStatus.SYMMETRY_UNSAFE:
+        live.restart()
+        out = search(grounded, max_states=settings.max_states, max_depth=settings.max_depth,
+                     budget=budget, stats=live, heuristic=settings.heuristic)
+    return out
+
+
+def _extract(problem: Problem, out: SearchOutcome, public: dict[str, Any],
+             budget: Budget) -> Policy | LimitReached | str:
+    """Return the policy the values chose, on the real objects (docs/policy-format.md,
+    ``public`` its statistics); the limit that stopped extraction; or, over canonical states,
+    why the chosen policy could not be mapped back (then the caller solves without
+    symmetry)."""
+    budget.phase = "extraction"
+    try:
+        budget.check()
+        graph, root, values = out.graph, out.root, out.values
+        assert values is not None
+        if graph.sym is not None:
+            real = realise(graph, root, values, check=budget.check)
+            if isinstance(real, str):
+                return real
+            graph, root, values = real
+        policy = extract(graph, root, values, problem_name=problem.name,
+                         optimal=out.optimal, stats=public, check=budget.check)
+        budget.check()
+        return policy
+    except LimitReached as e:
+        return e
+    except MemoryError:
+        return budget.out_of_memory()
+
+
+def _policy_stats(stats: SolveStats, policy: Policy) -> None:
+    """Add the policy's figures to the statistics a result reports."""
+    stats["cost"] = policy.cost
+    stats["communications"] = policy.communications
+    stats["leaves"] = policy.leaves
+    stats["worst_case"] = policy.worst_case
+    stats["expected"] = policy.expected
+
+
+def _reason(problem: Problem, grounded: Grounded, out: SearchOutcome, status: SolveStatus,
+            reason: str, optimal: bool, budget: Budget, settings: _Settings) -> str:
+    """Return what a result says besides its status: why no policy exists (the goal
+    literals or agendas that fail everywhere, the choice the robot cannot see, else one
+    failing line of play), why a policy is not proven optimal (§7: expected cost on a graph
+    with cycles), or the limit's ``reason``."""
+    if status == SolveStatus.UNSOLVABLE:
         # name the goal literals or agendas that fail everywhere; a line of play that dies
         # is only the fallback (it is one of many, and may look arbitrary)
         graph, root = out.graph, out.root
         hidden = ""
         if any(len(es.human_agendas) > 1 for es in graph.states):
-            hidden = _hidden_choice(problem, budget, max_states, max_depth)
-        reason = "no policy exists: " + hidden + diagnose(grounded, graph,
-                                                          lambda: explain_failure(graph, root))
-    elif status == "solved" and not optimal:  # §7: expected cost on a graph with cycles
-        reason = ("not proven optimal: the solvable graph has cycles, so choices inside them "
-                  "were restricted to those of the worst-case pass")
-    budget.phase = "done"
-    return Result(status, policy, stats, reason, optimal)
+            hidden = _hidden_choice(problem, budget, settings)
+        return "no policy exists: " + hidden + diagnose(grounded, graph,
+                                                        lambda: explain_failure(graph, root))
+    if status == SolveStatus.SOLVED and not optimal:
+        return ("not proven optimal: the solvable graph has cycles, so choices inside them "
+                "were restricted to those of the worst-case pass")
+    return reason
 
 
-def _hidden_choice(problem: Problem, budget: Budget, max_states: int | None,
-                   max_depth: int | None) -> str:
+def _hidden_choice(problem: Problem, budget: Budget, settings: _Settings) -> str:
     """docs/semantics.md §3-§4: when a robot that saw the human's method choices would have
     a policy, the choice it cannot see is the reason there is none: return it in words
     (the first human move of that policy whose label had to name the intention), else ""."""
     seen = replace(problem, human=replace(problem.human, intentions=Intentions.VISIBLE))
     try:
-        other = solve(seen, max_states=max_states, max_depth=max_depth, budget=budget)
+        other = solve(seen, max_states=settings.max_states, max_depth=settings.max_depth,
+                      budget=budget, heuristic=settings.heuristic)
     except LimitReached:
         return ""
     if other.policy is None:
@@ -153,8 +216,4 @@ def _hidden_choice(problem: Problem, budget: Budget, max_states: int | None,
     return ""
 
 
-def _restart(live: Stats) -> None:
-    """Statistics start again for a search without symmetry."""
-    fresh = Stats()
-    for k in ("generated", "distinct", "expanded", "max_worlds", "frontier"):
-        setattr(live, k, getattr(fresh, k))
+__all__ = ["LIMITS", "Result", "solve"]

@@ -12,7 +12,7 @@ from ..model.htn import Agenda
 from ..model.options import Objective, ObjectiveKind
 from ..model.problem import Cost
 from ..policy_format import Policy, PolicyMove, PolicyNode, num, topological_order
-from .andor import EXPANDED, GOAL, Edge, Graph, _move_key
+from .graph import DEAD, EXPANDED, GOAL, OPEN, Edge, Graph, move_key
 from .values import Values, weighted_mean
 
 
@@ -161,7 +161,7 @@ def _realise(gr: Graph, root: int, values: Values,
         rg.status[r] = EXPANDED
         edges = gr.edges[n]
         chosen = [edges[values.choice[n]]] if gr.is_robot(n) else list(edges)
-        real = sorted(sem.moves(rg.states[r]), key=_move_key)
+        real = sorted(sem.moves(rg.states[r]), key=move_key)
         if not gr.is_robot(n) and len(real) != len(chosen):
             return f"{len(real)} real moves for {len(chosen)} canonical ones"
         used: set[int] = set()
@@ -247,8 +247,6 @@ def graph_costs(nodes: list[PolicyNode], objective: Objective) -> tuple[list[Cos
 def explain_failure(gr: Graph, root: int) -> str:
     """Follow one failing line of play from the root and say where it dies (over canonical
     states, docs/semantics.md §3, the moves are renamed back to the real objects)."""
-    from .andor import DEAD, OPEN
-
     sem = gr.sem
     sym = gr.sym
     tau = sym.inverse(gr.root_perm) if sym is not None else 0

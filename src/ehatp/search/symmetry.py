@@ -33,6 +33,7 @@ mismatch also falls back (it would be a bug, never a wrong policy).
 from __future__ import annotations
 
 import re
+import warnings
 from collections import Counter
 from collections.abc import Callable, Iterable, Sequence
 from itertools import combinations
@@ -43,10 +44,26 @@ from ..epistemic.state import EState, Worlds, normalize, states_of
 from ..model.formula import And, Formula, GAtom, GTest, Not, Or
 from ..model.grounding import GModel, Grounded
 from ..model.htn import Agenda
+from ..model.problem import Limits
 
 OVERRIDE: bool | None = None
-"""When not None, replaces every problem's ``[limits] symmetry`` (benchmarks use it to compare
-runs with and without symmetry; worker processes forked later inherit it)."""
+"""Deprecated, goes in the next release: pass ``symmetry=`` to ``solve`` instead. When not
+None, replaces every problem's ``[limits] symmetry`` in a solve whose caller does not say
+(worker processes forked later inherit it)."""
+
+
+def enabled(symmetry: bool | None, limits: Limits) -> bool:
+    """Return whether a solve searches over canonical states: ``symmetry`` when the caller
+    says, else the problem's ``[limits] symmetry`` (unless the deprecated :data:`OVERRIDE`
+    says otherwise)."""
+    if symmetry is not None:
+        return symmetry
+    if OVERRIDE is not None:
+        warnings.warn("ehatp.search.symmetry.OVERRIDE is deprecated and goes in the next "
+                      "release: pass symmetry=True/False to solve()", DeprecationWarning,
+                      stacklevel=3)
+        return OVERRIDE
+    return limits.symmetry
 
 _TOKEN = re.compile(r"[^\s(),=\[\]<>!|{}+;:]+")
 
@@ -586,5 +603,5 @@ def describe_classes(sym: Symmetry) -> list[list[str]]:
     return [[sym.objects[i] for i in cls] for cls in sym.classes]
 
 
-__all__ = ["OVERRIDE", "Symmetry", "SymSemantics", "describe_classes", "detect",
+__all__ = ["OVERRIDE", "Symmetry", "SymSemantics", "describe_classes", "detect", "enabled",
            "fixed_objects"]

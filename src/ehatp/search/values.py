@@ -34,16 +34,13 @@ import heapq
 from collections.abc import Callable
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import TYPE_CHECKING
 
 from ..epistemic.semantics import ACTION, ANNOUNCE, ASK, INFORM, WAIT, Move
 from ..epistemic.state import ROBOT
 from ..model.options import Objective, ObjectiveKind
 from ..model.problem import Cost
-
-if TYPE_CHECKING:
-    from .andor import Graph
-    from .limits import Budget
+from .graph import GOAL, Graph
+from .limits import Budget
 
 INF = float("inf")
 CHECK_EVERY = 1023  # budget.check() once per this many + 1 nodes
@@ -119,8 +116,6 @@ def knuth(gr: Graph, budget: Budget | None = None) -> tuple[list[Cost | float], 
     """§7, worst case: the least fixpoint of the min/max equations by Knuth's generalisation of
     Dijkstra's algorithm; returns the values and the order in which nodes were finalised
     (every child a node's value comes from is finalised before it)."""
-    from .andor import GOAL
-
     n_nodes = len(gr.states)
     value: list[Cost | float] = [INF] * n_nodes
     final = bytearray(n_nodes)
@@ -185,9 +180,6 @@ class LiveWorst:
     cost 0 the root is recomputed by a full pass instead."""
 
     def __init__(self, gr: Graph, budget: Budget | None = None) -> None:
-        from .andor import GOAL
-
-        self.goal = GOAL
         self.gr = gr
         self.budget = budget
         self.value, _ = knuth(gr, budget)
@@ -213,7 +205,7 @@ class LiveWorst:
     def _eval(self, n: int) -> Cost | float:
         """``n``'s equation on the current values of its children."""
         gr, value = self.gr, self.value
-        if gr.status[n] == self.goal:
+        if gr.status[n] == GOAL:
             return 0
         edges = gr.edges[n]
         if gr.states[n].turn == ROBOT:  # robot: the best option
@@ -381,8 +373,6 @@ def _choose(gr: Graph, order: list[int], allowed: Callable[[int, int], bool], ob
     each chosen sub-policy (§7 ties: communications, waits, leaves and their summed length,
     worst case, expected cost), in arrays indexed by node. Returns the choices and the
     expected costs (None unless ``need_mean``)."""
-    from .andor import GOAL
-
     expected = obj.kind == ObjectiveKind.EXPECTED
     ties = obj.ties
     weights: dict[str, Fraction] = {}
