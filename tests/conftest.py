@@ -18,9 +18,9 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import NamedTuple
 
 import ehatp
 from ehatp import Policy, Problem, Result
@@ -110,12 +110,16 @@ def example(name: str) -> Example:
     return found[0]
 
 
-class Solved(NamedTuple):
-    """One caller's copies of a solved problem."""
+@dataclass(frozen=True)
+class Solved:
+    """One caller's copies of a solved problem; it unpacks as ``problem, policy``."""
 
     problem: Problem
     policy: Policy
     result: Result  # status, stats, reason, optimal; its .policy is ``policy``
+
+    def __iter__(self) -> Iterator[Problem | Policy]:
+        return iter((self.problem, self.policy))
 
 
 _SOLVED: dict[Path, Result] = {}

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import random
 import xml.etree.ElementTree as ET
-from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -13,29 +12,16 @@ import pytest
 from typer.testing import CliRunner
 
 import ehatp
-from ehatp.model.problem import Problem
-from ehatp.policy_format import Policy
+from ehatp import Policy
 from ehatp.tools import bt
 from ehatp.tools.cli import app
 from ehatp.tools.executor import Executor
 
-ROOT = Path(__file__).resolve().parent.parent
-EXAMPLES = sorted((ROOT / "examples").glob("**/*.toml"))
-CUBES = ROOT / "examples" / "cubes"
+from .conftest import DATA, EXAMPLES, EXAMPLES_DIR, Example, solved
+
+CUBES = EXAMPLES_DIR / "cubes"
 RUNS = 100  # seeded random humans per example
 BUILT_IN = {"Sequence", "Fallback", "SubTree", "AlwaysFailure"}
-
-
-def _ids(p: Path) -> str:
-    return str(p.relative_to(ROOT / "examples"))
-
-
-@cache
-def solved(path: Path) -> tuple[Problem, Policy]:
-    problem = ehatp.load(path)
-    result = ehatp.solve(problem)
-    assert result.policy is not None, result.reason
-    return problem, result.policy
 
 
 def py_trees_or_skip() -> Any:
@@ -165,9 +151,9 @@ def xml_shape(text: str) -> dict[str, list[tuple[Any, ...]]]:
     return out
 
 
-@pytest.mark.parametrize("path", EXAMPLES, ids=_ids)
-def test_xml_is_well_formed_complete_and_round_trips(path: Path) -> None:
-    problem, policy = solved(path)
+@pytest.mark.parametrize("example", EXAMPLES, ids=str)
+def test_xml_is_well_formed_complete_and_round_trips(example: Example) -> None:
+    problem, policy = solved(example)
     text = bt.to_btcpp(bt.from_policy(policy, bt.answers_of(problem, policy)))
     root = ET.fromstring(text)  # well-formed
     assert root.tag == "root" and root.attrib["BTCPP_format"] == "4"
@@ -195,7 +181,7 @@ def test_xml_is_well_formed_complete_and_round_trips(path: Path) -> None:
 
 
 def test_answers_to_questions() -> None:
-    problem, policy = solved(CUBES / "qualitative-ask.toml")
+    problem, policy = solved("cubes/qualitative-ask")
     text = bt.to_btcpp(bt.from_policy(policy, bt.answers_of(problem, policy)))
     says = {e.attrib["question"]: e.attrib["answer"] for e in ET.fromstring(text).iter("Say")
             if e.attrib["kind"] == "answer"}
@@ -256,14 +242,14 @@ def tick_to_end(root: Any, limit: int = 10_000) -> Any:
     raise AssertionError("the tree is still running")
 
 
-@pytest.mark.parametrize("path", EXAMPLES, ids=_ids)
-def test_py_tree_reaches_the_goal_against_the_executor(path: Path) -> None:
+@pytest.mark.parametrize("example", EXAMPLES, ids=str)
+def test_py_tree_reaches_the_goal_against_the_executor(example: Example) -> None:
     py_trees_or_skip()
     from py_trees.common import Status
 
     from ehatp.tools.bt_py_trees import HumanTurn, RobotCommand
 
-    problem, policy = solved(path)
+    problem, policy = solved(example)
     start = Executor(problem, policy)
     start.replay_opening()  # the policy starts after the problem's fixed opening
     run = Run(start.copy(), 0)
@@ -305,7 +291,7 @@ def test_uncovered_human_action_is_reported_once_and_fails() -> None:
     py_trees_or_skip()
     from py_trees.common import Status
 
-    _, policy = solved(CUBES / "p2.toml")
+    _, policy = solved("cubes/p2")
     choices = iter(["__first__", "dance"])  # covered at the first choice, then uncovered
     turns: list[Any] = []
     reported: list[tuple[str, list[str]]] = []
@@ -326,7 +312,7 @@ def test_robot_running_and_failing() -> None:
     py_trees_or_skip()
     from py_trees.common import Status
 
-    _, policy = solved(CUBES / "qualitative.toml")
+    _, policy = solved("cubes/qualitative")
     calls: list[str] = []
 
     def slow(cmd: Any) -> bool | None:  # each command runs for two ticks
@@ -345,7 +331,7 @@ def test_py_trees_module_builds_the_same_tree(tmp_path: Path) -> None:
     py_trees = py_trees_or_skip()
     from py_trees.common import Status
 
-    problem, policy = solved(CUBES / "p4.toml")
+    problem, policy = solved("cubes/p4")
     pfile = tmp_path / "p4.json"
     policy.write(pfile)
     out = tmp_path / "p4_tree.py"
@@ -382,7 +368,7 @@ def test_py_trees_module_builds_the_same_tree(tmp_path: Path) -> None:
 def test_a_large_policy_with_hidden_intentions_keeps_its_shape_and_a_shallow_module() -> None:
     # the 8-cube problem's human reaches move(mt, ot) by several methods (to fetch one cube or
     # another): the robot sees one move, and the node after it holds several human agendas
-    problem, policy = solved(ROOT / "tests" / "data" / "cubes-8.toml")
+    problem, policy = solved(DATA / "cubes-8.toml")
     assert any(len(n.human_agendas) > 1 for n in policy.nodes)
     assert all(len({m.action for m in n.moves}) == len(n.moves) for n in policy.nodes)
     bt.answers_of(problem, policy)  # walks every node along the policy's edges

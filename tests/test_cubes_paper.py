@@ -1,4 +1,5 @@
-"""The cube problems exactly as the paper's prototype models them (spec paper-domains.md).
+"""The cube problems exactly as the paper's prototype models them (the authors' public
+prototype, as the project's specification of the paper's domains describes it).
 
 Two rules set our P1-P6 apart from a looser model: the human handles only the cubes it must
 fetch from ``ot`` (reach), and in the K=4 instances it sees a table, and the transparent boxes
@@ -22,13 +23,15 @@ from ehatp.model.grounding import ground_problem
 from ehatp.model.problem import Problem
 from ehatp.search.andor import search
 
+from .conftest import CUBES_TABLE1, EXAMPLES_DIR
 from .scenarios import labels, walk, world_atoms
 
-CUBES = Path(__file__).resolve().parents[1] / "examples" / "cubes"
-TABLE1 = ["p1", "p2", "p3", "p4", "p5", "p6"]
-K2, K4 = TABLE1[:4], TABLE1[4:]
+CUBES = EXAMPLES_DIR / "cubes"
+TABLE1 = [e.stem for e in CUBES_TABLE1]  # p1 ... p6
+K2 = [e.stem for e in CUBES_TABLE1 if e.table1 and e.table1.K == 2]
+K4 = [e.stem for e in CUBES_TABLE1 if e.table1 and e.table1.K == 4]
 
-# the prototype's P2 branch where the human leaves at once (paper-domains.md, worked examples)
+# the prototype's P2 branch where the human leaves at once (its worked examples)
 P2_AWAY = ["H move(mt, ot)", "R pick(r)", "H pick(w)", "R place(r, box1)", "H move(ot, mt)"]
 # the prototype's first P5 branch, with the worlds its trace prints after each step
 P5_BRANCH = [
@@ -162,7 +165,7 @@ def test_k2_moves_keep_at_and_facing_together(name: str) -> None:
             a.replace("facing", "at") for a in atoms if a.startswith("facing(H")}
 
 
-# -- the worked examples of paper-domains.md -------------------------------------------------
+# -- the prototype's worked examples -------------------------------------------------------
 
 def test_p2_worked_example() -> None:
     sem, states = run(load("p2"), P2_AWAY)

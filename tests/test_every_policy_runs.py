@@ -6,58 +6,41 @@ can agree on a policy that a robot cannot follow; the executor is a third reader
 from __future__ import annotations
 
 import dataclasses
-from functools import cache
-from pathlib import Path
 
 import pytest
 
 import ehatp
-from ehatp import Communication, Domain, HumanModel, Var
+from ehatp import Communication, Domain, HumanModel, Policy, Var
 from ehatp.model.options import Intentions, Speech
 from ehatp.model.problem import Problem
-from ehatp.policy_format import Policy
 from ehatp.tools import bt
 from ehatp.tools.executor import Executor
 from ehatp.tools.walk import tick_py_trees, walk_policy
 
+from .conftest import EXAMPLES, Example, solved
 from .scenarios import problem as scenario
 from .test_intentions import car_problem, shelf_problem
 
-ROOT = Path(__file__).resolve().parent.parent
-EXAMPLES = sorted((ROOT / "examples").glob("**/*.toml"))
 
-
-def _ids(p: Path) -> str:
-    return str(p.relative_to(ROOT / "examples"))
-
-
-@cache
-def solved(path: Path) -> tuple[Problem, Policy]:
-    problem = ehatp.load(path)
-    result = ehatp.solve(problem)
-    assert result.policy is not None, result.reason
-    return problem, result.policy
-
-
-@pytest.mark.parametrize("path", EXAMPLES, ids=_ids)
-def test_every_shipped_example_walks_to_the_goal_on_every_branch(path: Path) -> None:
-    problem, policy = solved(path)
+@pytest.mark.parametrize("example", EXAMPLES, ids=str)
+def test_every_shipped_example_walks_to_the_goal_on_every_branch(example: Example) -> None:
+    problem, policy = solved(example)
     report = walk_policy(problem, policy)
     assert report.ok, report.message
     assert not report.capped and report.branches == policy.leaves
 
 
-@pytest.mark.parametrize("path", EXAMPLES, ids=_ids)
-def test_every_shipped_example_s_behaviour_tree_ticks_to_the_goal(path: Path) -> None:
+@pytest.mark.parametrize("example", EXAMPLES, ids=str)
+def test_every_shipped_example_s_behaviour_tree_ticks_to_the_goal(example: Example) -> None:
     pytest.importorskip("py_trees", reason="py_trees is not installed (pip install 'ehatp[bt]')")
-    problem, policy = solved(path)
+    problem, policy = solved(example)
     report = tick_py_trees(problem, policy)
     assert report.ok, report.message
     assert not report.capped and report.branches == policy.leaves
 
 
 def test_the_walk_stops_at_the_cap_and_says_so() -> None:
-    problem, policy = solved(ROOT / "examples" / "cubes" / "x1-4cubes-k2.toml")
+    problem, policy = solved("cubes/x1-4cubes-k2")
     assert policy.leaves > 3
     report = walk_policy(problem, policy, cap=3)
     assert report.ok and report.capped and report.branches == 3
@@ -67,7 +50,7 @@ def test_the_walk_stops_at_the_cap_and_says_so() -> None:
 
 
 def test_a_policy_whose_leaf_is_no_goal_fails_the_walk_on_that_branch() -> None:
-    problem, policy = solved(ROOT / "examples" / "cubes" / "p2.toml")
+    problem, policy = solved("cubes/p2")
     d = policy.to_dict()
     # cut the policy after its first move: the node it reaches becomes a leaf
     first = d["nodes"][0]["moves"][0]
@@ -80,7 +63,7 @@ def test_a_policy_whose_leaf_is_no_goal_fails_the_walk_on_that_branch() -> None:
 
 
 def test_a_policy_that_does_not_fit_fails_the_walk_with_the_executor_s_error() -> None:
-    problem, policy = solved(ROOT / "examples" / "cubes" / "p2.toml")
+    problem, policy = solved("cubes/p2")
     d = policy.to_dict()
     second = d["nodes"][0]["moves"][1]
     d["nodes"][second["to"]]["worlds"] = 7
@@ -92,7 +75,7 @@ def test_a_policy_that_does_not_fit_fails_the_walk_with_the_executor_s_error() -
 
 def test_a_human_choice_covered_twice_under_one_label_fails_the_walk() -> None:
     # a robot that sees only the human's action cannot tell two such branches apart (§3)
-    problem, policy = solved(ROOT / "examples" / "cubes" / "p2.toml")
+    problem, policy = solved("cubes/p2")
     d = policy.to_dict()
     first, second = d["nodes"][0]["moves"][:2]
     second["action"] = first["action"]
@@ -104,7 +87,7 @@ def test_a_human_choice_covered_twice_under_one_label_fails_the_walk() -> None:
 
 
 def test_a_problem_with_a_fixed_opening_walks_from_where_the_opening_ends() -> None:
-    problem, policy = solved(ROOT / "examples" / "cubes" / "qualitative.toml")
+    problem, policy = solved("cubes/qualitative")
     assert problem.after
     report = walk_policy(problem, policy)
     assert report.ok and report.branches == policy.leaves

@@ -22,7 +22,8 @@ def test_the_registry_lists_every_shipped_example_once() -> None:
 
 @pytest.mark.parametrize("example", EXAMPLES, ids=str)
 def test_every_example_solves_to_its_registered_figures(example: Example) -> None:
-    problem, policy, result = solved(example)
+    got = solved(example)
+    problem, policy, result = got.problem, got.policy, got.result
     assert result.status == "solved" and result.optimal
     assert (policy.cost, policy.communications, policy.leaves, result.stats["max_worlds"]) == (
         example.cost, example.communications, example.leaves, example.worlds)

@@ -8,7 +8,6 @@ import io
 import json
 import subprocess
 import sys
-from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -19,17 +18,10 @@ from ehatp.policy_format import Policy
 from ehatp.tools.execute import json_lines, run
 from ehatp.tools.executor import ExecutionError, Executor, UncoveredHumanAction
 
-ROOT = Path(__file__).resolve().parent.parent
-EXAMPLES = sorted((ROOT / "examples").glob("**/*.toml"))
-CUBES = ROOT / "examples" / "cubes"
+from .conftest import EXAMPLES, EXAMPLES_DIR, ROOT, Example, solved
+
+CUBES = EXAMPLES_DIR / "cubes"
 QUAL, QUAL_ASK = CUBES / "qualitative.toml", CUBES / "qualitative-ask.toml"
-
-
-@cache
-def policy_of(path: Path) -> Policy:
-    result = ehatp.solve(ehatp.load(path))
-    assert result.policy is not None
-    return result.policy
 
 
 def ehatp_cli(*args: str | Path, stdin: str) -> subprocess.CompletedProcess[str]:
@@ -60,7 +52,7 @@ def kinds(msgs: list[dict[str, Any]]) -> list[str]:
 def test_scripted_session_replans_and_reaches_the_goal(tmp_path: Path) -> None:
     # planned for a human who asks when blocked; here the human may also wait silently
     pfile = tmp_path / "ask.json"
-    policy_of(QUAL_ASK).write(pfile)
+    solved(QUAL_ASK).policy.write(pfile)
     script = lines({"robot_done": "wait"},      # the policy's first move
                    {"human": "pass"},           # not covered: the human waits silently
                    {"robot_done": True},        # whatever the new policy said
@@ -98,7 +90,7 @@ def test_scripted_session_replans_and_reaches_the_goal(tmp_path: Path) -> None:
 
 
 def test_without_replan_an_uncovered_action_is_one_error_line_and_the_run_goes_on() -> None:
-    ex = Executor(ehatp.load(QUAL), policy_of(QUAL_ASK))
+    ex = Executor(ehatp.load(QUAL), solved(QUAL_ASK).policy)
     code, msgs = session(ex, lines({"robot_done": True}, {"human": "pass"},
                                    {"human": "ask(can_put(w, box2))"}, {"robot_done": True},
                                    {"human": "place(w, box2)"}))
@@ -118,7 +110,7 @@ def test_protocol_errors_are_one_json_line_each() -> None:
            '{"human": 3}', '{"robot_done": 1}', '{"human": "pass"}',   # the robot is to move
            '{"robot_done": "pick(w)"}',                                # not the policy's move
            "", "   "]                                                  # blank: ignored
-    ex = Executor(ehatp.load(QUAL), policy_of(QUAL))
+    ex = Executor(ehatp.load(QUAL), solved(QUAL).policy)
     code, msgs = session(ex, lines(*bad, {"robot_done": "inform(empty(box2))"},
                                    {"human": "dance"},                  # not a move of H
                                    {"robot_done": True},                # H is to move
@@ -136,7 +128,7 @@ def test_protocol_errors_are_one_json_line_each() -> None:
 
 
 def test_input_ending_before_the_goal_exits_1() -> None:
-    ex = Executor(ehatp.load(QUAL), policy_of(QUAL))
+    ex = Executor(ehatp.load(QUAL), solved(QUAL).policy)
     code, msgs = session(ex, lines({"robot_done": True}))
     assert code == 1
     assert msgs[-1]["error"] == "end-of-input"
@@ -154,10 +146,9 @@ def test_cli_exit_codes() -> None:
 # --- Executor.as_problem and replan -------------------------------------------------------------
 
 
-@pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: str(p.relative_to(ROOT / "examples")))
-def test_as_problem_of_a_fresh_executor_solves_to_the_same_cost(path: Path) -> None:
-    problem = ehatp.load(path)
-    policy = policy_of(path)
+@pytest.mark.parametrize("example", EXAMPLES, ids=str)
+def test_as_problem_of_a_fresh_executor_solves_to_the_same_cost(example: Example) -> None:
+    problem, policy = solved(example)
     again = ehatp.solve(Executor(problem, policy).as_problem())
     assert again.policy is not None
     assert again.policy.cost == policy.cost
@@ -166,7 +157,7 @@ def test_as_problem_of_a_fresh_executor_solves_to_the_same_cost(path: Path) -> N
 
 def test_replan_mid_execution_is_valid_and_continues() -> None:
     problem = ehatp.load(CUBES / "p4.toml")
-    ex = Executor(problem, policy_of(CUBES / "p4.toml"))
+    ex = Executor(problem, solved(CUBES / "p4.toml").policy)
     for _ in range(3):  # a few steps into the policy
         if ex.next_robot_action() is not None:
             ex.robot_action_done()
@@ -187,7 +178,7 @@ def test_replan_mid_execution_is_valid_and_continues() -> None:
 
 
 def test_replan_refuses_what_the_human_model_does_not_allow() -> None:
-    ex = Executor(ehatp.load(QUAL), policy_of(QUAL_ASK))
+    ex = Executor(ehatp.load(QUAL), solved(QUAL_ASK).policy)
     ex.replay_opening()
     ex.robot_action_done()
     state, policy, n = ex.state, ex.policy, len(ex.history)
@@ -206,7 +197,7 @@ def forced_wait() -> Executor:
     """The cube problem whose human asks when blocked, after its opening and the robot's wait:
     the robot had nothing to do (a forced wait), so the fairness rule (docs/semantics.md §4)
     lets the policy leave out the human's pass: it covers the human's two questions only."""
-    ex = Executor(ehatp.load(QUAL_ASK), policy_of(QUAL_ASK))
+    ex = Executor(ehatp.load(QUAL_ASK), solved(QUAL_ASK).policy)
     ex.replay_opening()
     ex.robot_action_done("wait")
     assert ex.state.forced
@@ -261,7 +252,7 @@ def test_replanning_after_a_robot_move_that_shares_its_label_replays_the_move_ta
 
 def test_replan_within_the_opening_keeps_it() -> None:
     problem = ehatp.load(QUAL)
-    ex = Executor(problem, policy_of(QUAL))
+    ex = Executor(problem, solved(QUAL).policy)
     ex.observe_human_action("move(mt, ot)")
     ex.replan()
     assert ex.in_opening and ex.policy.after == list(problem.after)
@@ -273,7 +264,7 @@ def test_replan_within_the_opening_keeps_it() -> None:
 
 
 def test_policy_repr_html_is_the_explorer_in_an_iframe() -> None:
-    policy = policy_of(CUBES / "p2.toml")
+    policy = solved(CUBES / "p2.toml").policy
     html = policy._repr_html_()
     assert html.startswith("<iframe") and html.rstrip().endswith("</iframe>")
     assert 'sandbox="allow-scripts"' in html

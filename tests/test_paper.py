@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from dataclasses import replace
-from pathlib import Path
 
 import pytest
 
@@ -13,10 +12,10 @@ from ehatp.model.grounding import ground_problem
 from ehatp.policy_format import Policy
 from ehatp.search.andor import search
 
+from .conftest import EXAMPLES, EXAMPLES_DIR, Example, example, solved
 from .scenarios import labels, walk, world_atoms
 
-EX = Path(__file__).resolve().parents[1] / "examples"
-CUBES = EX / "cubes"
+CUBES = EXAMPLES_DIR / "cubes"
 AWAY = ["H move(mt, ot)", "R pick(r)", "H pick(w)", "R place(r, box1)"]
 BACK = [*AWAY, "H move(ot, mt)"]
 BOXES = {"in(r, box1)", "in(r, box2)", "empty(box1)", "empty(box2)"}
@@ -43,8 +42,8 @@ def test_transparent_boxes_leave_one_world_and_need_no_communication() -> None:
     sem, es = walk(ehatp.load(CUBES / "p1.toml"), *BACK)
     assert len(es.worlds) == 1
     for name in ("p1", "p3", "p5"):
-        r = ehatp.solve(ehatp.load(CUBES / f"{name}.toml"))
-        assert r.policy is not None and r.policy.communications == 0, name
+        assert solved(f"cubes/{name}").policy.communications == 0, name
+        assert example(f"cubes/{name}").communications == 0, name
 
 
 def _after_return(policy: Policy) -> list[str]:
@@ -79,14 +78,15 @@ def test_annoying_robot_waits_for_the_question_and_answers_it() -> None:
 
 
 def test_human_never_puts_w_in_the_box_holding_r() -> None:
-    for f in sorted(CUBES.glob("*.toml")):
-        r = ehatp.solve(ehatp.load(f))
-        assert r.policy is not None
-        for branch in r.policy.branches():
+    cubes = [e for e in EXAMPLES if e.folder == "cubes"]
+    assert len(cubes) == len(list(CUBES.glob("*.toml")))
+    for e in cubes:
+        policy = solved(e).policy
+        for branch in policy.branches():
             for before, step in zip(branch, branch[1:], strict=False):
                 if step.agent == "H" and step.name == "place" and step.args[0] == "w":
                     box = step.args[1]
-                    assert f"in(r, {box})" not in before.state, (f.name, step.action)
+                    assert f"in(r, {box})" not in before.state, (e.name, step.action)
 
 
 def test_placing_y_in_front_of_the_human_leaves_a_single_world() -> None:
@@ -138,12 +138,11 @@ def test_prototype_pass_rule_makes_deferral_strictly_cheaper() -> None:
     assert costs["wait"] == 5 and costs["place(r, box1)"] == costs["place(r, box2)"] == 6
 
 
-@pytest.mark.parametrize("path", sorted(str(p.relative_to(EX)) for p in EX.glob("*/*.toml")))
-def test_every_shipped_instance_solves_and_validates(path: str) -> None:
-    p = ehatp.load(EX / path)
-    r = ehatp.solve(p)
-    assert r.status == "solved" and r.policy is not None and r.optimal
-    report = ehatp.validate(p, r.policy)
+@pytest.mark.parametrize("example", EXAMPLES, ids=str)
+def test_every_shipped_instance_solves_and_validates(example: Example) -> None:
+    got = solved(example)
+    assert got.result.status == "solved" and got.result.optimal
+    report = ehatp.validate(got.problem, got.policy)
     assert report.ok, report.message
 
 

@@ -7,7 +7,6 @@ from __future__ import annotations
 import copy
 import json
 import re
-from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -16,31 +15,20 @@ import pytest
 from typer.testing import CliRunner
 
 import ehatp
-from ehatp import Policy, Problem
+from ehatp import Policy
 from ehatp.check.validator import validate
 from ehatp.policy_format import PolicyMove
 from ehatp.tools.cli import app
 from ehatp.tools.common import read_policy
 
+from .conftest import DATA, EXAMPLES, EXAMPLES_DIR, ROOT, Example, solved
 from .policy_v1 import tree_dict
 
-ROOT = Path(__file__).resolve().parent.parent
-EXAMPLES = sorted((ROOT / "examples").glob("*/*.toml"))
-DATA = Path(__file__).resolve().parent / "data"
 V1 = DATA / "p4-v1.json"  # written by the version 1 writer (the tree, timelines included)
 CUBES8 = DATA / "cubes-8.toml"
 SCHEMA = ROOT / "docs" / "policy.schema.json"
+P4 = EXAMPLES_DIR / "cubes" / "p4.toml"
 MAX_BYTES_PER_NODE = 2048
-
-ids = {"ids": lambda p: f"{p.parent.name}/{p.stem}"}
-
-
-@cache
-def planned(path: Path) -> tuple[Problem, Policy]:
-    problem = ehatp.load(path)
-    policy = ehatp.solve(problem).policy
-    assert policy is not None, path
-    return problem, policy
 
 
 def written(policy: Policy, tmp_path: Path, name: str = "policy.json") -> Path:
@@ -56,7 +44,7 @@ def invoke(*args: object) -> Any:
 # -- the format --------------------------------------------------------------------------------
 
 def test_a_policy_with_shared_nodes_round_trips_byte_identically(tmp_path: Path) -> None:
-    problem, policy = planned(ROOT / "examples" / "cubes" / "p4.toml")
+    problem, policy = solved("cubes/p4")
     copies = policy.path_counts()
     assert max(copies) > 1  # some nodes are reached by several paths
     f = written(policy, tmp_path)
@@ -71,7 +59,7 @@ def test_a_policy_with_shared_nodes_round_trips_byte_identically(tmp_path: Path)
 
 
 def test_nodes_are_states_and_moves_are_edges(tmp_path: Path) -> None:
-    _, policy = planned(ROOT / "examples" / "cubes" / "p4.toml")
+    _, policy = solved("cubes/p4")
     data = json.loads(written(policy, tmp_path).read_text(encoding="utf-8"))
     assert data["version"] == 2 and "timelines" not in data
     for i, node in enumerate(data["nodes"]):
@@ -87,9 +75,9 @@ def test_nodes_are_states_and_moves_are_edges(tmp_path: Path) -> None:
     assert any(len(labels) > 1 for labels in into.values())
 
 
-@pytest.mark.parametrize("path", EXAMPLES, **ids)
-def test_counts_over_the_graph_equal_the_tree_unfolding(path: Path) -> None:
-    _, policy = planned(path)
+@pytest.mark.parametrize("example", EXAMPLES, ids=str)
+def test_counts_over_the_graph_equal_the_tree_unfolding(example: Example) -> None:
+    _, policy = solved(example)
     branches = policy.branches()
     assert len(branches) == policy.leaves == policy.count_branches()
     tree = tree_dict(policy)["nodes"]  # the version 1 tree, enumerated node by node
@@ -100,9 +88,9 @@ def test_counts_over_the_graph_equal_the_tree_unfolding(path: Path) -> None:
     assert len(policy.timelines()) == policy.leaves
 
 
-@pytest.mark.parametrize("path", EXAMPLES, **ids)
-def test_every_example_validates_from_its_file(path: Path, tmp_path: Path) -> None:
-    problem, policy = planned(path)
+@pytest.mark.parametrize("example", EXAMPLES, ids=str)
+def test_every_example_validates_from_its_file(example: Example, tmp_path: Path) -> None:
+    problem, policy = solved(example)
     loaded = Policy.load(written(policy, tmp_path))
     read_policy(written(policy, tmp_path))  # its counts match its graph
     r = ehatp.validate(problem, loaded)
@@ -113,15 +101,16 @@ def test_every_example_validates_from_its_file(path: Path, tmp_path: Path) -> No
 
 # -- size --------------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("path", [*EXAMPLES, CUBES8], ids=lambda p: p.stem)
-def test_file_size_is_proportional_to_distinct_nodes(path: Path, tmp_path: Path) -> None:
-    _, policy = planned(path)
+@pytest.mark.parametrize("problem", [*EXAMPLES, CUBES8], ids=lambda p: p.stem)
+def test_file_size_is_proportional_to_distinct_nodes(problem: Example | Path,
+                                                     tmp_path: Path) -> None:
+    _, policy = solved(problem)
     size = written(policy, tmp_path).stat().st_size
     assert size <= MAX_BYTES_PER_NODE * len(policy.nodes), (size, len(policy.nodes))
 
 
 def test_a_large_policy_is_a_small_graph(tmp_path: Path) -> None:
-    problem, policy = planned(CUBES8)
+    problem, policy = solved(CUBES8)
     nodes, tree = len(policy.nodes), policy.tree_size()
     assert tree > 20 * nodes  # the tree unfolding repeats the shared states many times
     assert policy.leaves > nodes
@@ -145,14 +134,14 @@ def test_the_schema_accepts_every_shipped_examples_policy(tmp_path: Path) -> Non
     schema = json.loads(SCHEMA.read_text(encoding="utf-8"))
     jsonschema.Draft202012Validator.check_schema(schema)
     check = jsonschema.Draft202012Validator(schema)
-    for path in EXAMPLES:
-        _, policy = planned(path)
+    for example in EXAMPLES:
+        _, policy = solved(example)
         data = json.loads(written(policy, tmp_path).read_text(encoding="utf-8"))
         errors = [f"{list(e.absolute_path)}: {e.message}" for e in check.iter_errors(data)]
-        assert errors == [], (path.name, errors[:3])
+        assert errors == [], (example.name, errors[:3])
     # and it is strict: a version 1 file, a move without its target, a stray field
     assert list(check.iter_errors(json.loads(V1.read_text(encoding="utf-8"))))
-    data = json.loads(written(planned(EXAMPLES[0])[1], tmp_path).read_text(encoding="utf-8"))
+    data = json.loads(written(solved(EXAMPLES[0]).policy, tmp_path).read_text(encoding="utf-8"))
     bad = copy.deepcopy(data)
     del bad["nodes"][0]["moves"][0]["to"]
     assert list(check.iter_errors(bad))
@@ -172,13 +161,13 @@ def test_version_1_files_still_load_show_validate_and_render(tmp_path: Path) -> 
     assert policy.count_branches() == len(raw["timelines"])
     assert [t["steps"] for t in policy.timelines()] == [t["steps"] for t in raw["timelines"]]
     assert tree_dict(policy) == raw  # nothing lost (and tests.policy_v1 writes that shape)
-    problem = ehatp.load(ROOT / "examples" / "cubes" / "p4.toml")
+    problem = ehatp.load(P4)
     r = validate(problem, policy)
     assert r.ok, r.violations
     assert r.nodes_checked == len(raw["nodes"]) and r.branches_checked == raw["leaves"]
     shown = invoke("show", V1)
     assert shown.exit_code == 0 and not re.search(r"see node \d", shown.stdout)  # a tree
-    assert invoke("validate", ROOT / "examples" / "cubes" / "p4.toml", V1).exit_code == 0
+    assert invoke("validate", P4, V1).exit_code == 0
     assert invoke("render", V1).exit_code == 0
     # written again, it is version 2 with the same tree unfolding
     again = Policy.load(written(policy, tmp_path))
@@ -226,7 +215,7 @@ def _below_the_root(data: dict[str, Any]) -> None:
 
 
 def test_the_validator_rejects_a_shared_node_reached_in_two_states(tmp_path: Path) -> None:
-    problem, policy = planned(ROOT / "examples" / "cubes" / "p4.toml")
+    problem, policy = solved("cubes/p4")
     (at, j), other = _same_facts_pair(policy)
     data = policy.to_dict()
     data["nodes"][at]["moves"][j]["to"] = other  # two paths, two states, one node
@@ -244,7 +233,7 @@ def test_the_validator_rejects_a_shared_node_reached_in_two_states(tmp_path: Pat
 
 
 def test_a_shared_node_is_checked_once(tmp_path: Path) -> None:
-    problem, policy = planned(ROOT / "examples" / "cubes" / "p4.toml")
+    problem, policy = solved("cubes/p4")
     shared = max(range(len(policy.nodes)), key=lambda i: (policy.path_counts()[i], -i))
     data = policy.to_dict()
     data["nodes"][shared]["worlds"] += 5
@@ -263,7 +252,7 @@ def test_a_shared_node_is_checked_once(tmp_path: Path) -> None:
 
 
 def test_a_cycle_or_an_orphan_is_refused_when_read(tmp_path: Path) -> None:
-    _, policy = planned(ROOT / "examples" / "cubes" / "p2.toml")
+    _, policy = solved("cubes/p2")
     data = policy.to_dict()
     leaf = next(n for n in data["nodes"] if not n["moves"])
     leaf["moves"].append({**PolicyMove("H", "pass", "pass", "pass", [], 1, 1).to_dict()})

@@ -16,13 +16,13 @@ import pytest
 import typer
 from typer.testing import CliRunner
 
-import ehatp
 from ehatp.policy_format import Policy, PolicyMove, PolicyNode
 from ehatp.tools import render as rd
 
-EXAMPLES = Path(__file__).resolve().parent.parent / "examples" / "cubes"
-V1 = Path(__file__).resolve().parent / "data" / "p4-v1.json"  # written by format version 1
-NAMES = ["p1", "p2", "p3", "p4", "p5", "p6"]
+from .conftest import CUBES_TABLE1, DATA, solved
+
+V1 = DATA / "p4-v1.json"  # written by format version 1
+NAMES = [e.stem for e in CUBES_TABLE1]  # p1 ... p6
 NODE_STMT = re.compile(r"^\s*n(\d+) \[", re.M)
 EDGE_STMT = re.compile(r"^\s*n(\d+) -> n(\d+)", re.M)
 
@@ -33,7 +33,7 @@ def policy_files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     files = {}
     for name in NAMES:
         path = out / f"{name}.json"
-        ehatp.solve(ehatp.load(EXAMPLES / f"{name}.toml")).policy.write(path)
+        solved(f"cubes/{name}").policy.write(path)
         files[name] = path
     return files
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import re
-from functools import cache
 from pathlib import Path
 
 import pytest
@@ -20,19 +19,13 @@ from ehatp.tools.executor import (
 )
 from ehatp.tools.simulate import register
 
-ROOT = Path(__file__).resolve().parent.parent
-CUBES = ROOT / "examples" / "cubes"
+from .conftest import EXAMPLES, EXAMPLES_DIR, Example, solved
+
+CUBES = EXAMPLES_DIR / "cubes"
 P2, QUAL, QUAL_ASK = CUBES / "p2.toml", CUBES / "qualitative.toml", CUBES / "qualitative-ask.toml"
 
 STEP = re.compile(r"^(\d+)\. (\S+) (.+?)  \(cost [^;]+; (.*)\)$")
 WORLDS = re.compile(r"^  \S+ knows the truth; \S+ now entertains (\d+) worlds?")
-
-
-@cache
-def policy_of(path: Path) -> Policy:
-    result = ehatp.solve(ehatp.load(path))
-    assert result.policy is not None
-    return result.policy
 
 
 def app() -> typer.Typer:
@@ -66,7 +59,7 @@ def steps(output: str) -> list[tuple[str, str, str, int]]:
 
 def write_policy(tmp_path: Path, problem: Path) -> Path:
     path = tmp_path / f"{problem.stem}.json"
-    policy_of(problem).write(path)
+    solved(problem).policy.write(path)
     return path
 
 
@@ -81,7 +74,7 @@ def script_for(branch: list[PathStep], robot: str) -> str:
 # -- every branch of P2 ------------------------------------------------------------------------
 
 def test_every_p2_branch_reaches_the_goal_with_the_policy_world_counts(tmp_path: Path) -> None:
-    policy = policy_of(P2)
+    policy = solved(P2).policy
     pfile = write_policy(tmp_path, P2)
     robot = policy.agents["robot"]
     branches = policy.branches()
@@ -127,7 +120,7 @@ def test_qualitative_trace_informs_that_box2_is_empty(tmp_path: Path) -> None:
 
 
 def test_qualitative_executor_worlds_after_the_opening() -> None:
-    ex = Executor(ehatp.load(QUAL), policy_of(QUAL))
+    ex = Executor(ehatp.load(QUAL), solved(QUAL).policy)
     while ex.in_opening:
         if ex.next_robot_action() is not None:
             ex.robot_action_done()
@@ -172,7 +165,7 @@ def test_qualitative_ask_trace_waits_for_the_question(tmp_path: Path) -> None:
 
 def test_uncovered_human_action_raises_with_the_expected_actions() -> None:
     # planned for a human who asks when blocked; this problem's human may also wait silently
-    ex = Executor(ehatp.load(QUAL), policy_of(QUAL_ASK))
+    ex = Executor(ehatp.load(QUAL), solved(QUAL_ASK).policy)
     while ex.in_opening:
         if ex.next_robot_action() is not None:
             ex.robot_action_done()
@@ -193,7 +186,7 @@ def test_uncovered_human_action_raises_with_the_expected_actions() -> None:
 
 
 def test_human_leaving_the_opening_or_the_model() -> None:
-    ex = Executor(ehatp.load(QUAL), policy_of(QUAL))
+    ex = Executor(ehatp.load(QUAL), solved(QUAL).policy)
     with pytest.raises(UncoveredHumanAction, match=r"H did pass, which the problem's "
                        r"fixed opening does not cover; the policy expects move\(mt, ot\)"):
         ex.observe_human_action("pass")
@@ -205,7 +198,7 @@ def test_human_leaving_the_opening_or_the_model() -> None:
 
 
 def test_policy_with_a_missing_branch(tmp_path: Path) -> None:
-    d = policy_of(P2).to_dict()
+    d = solved(P2).policy.to_dict()
     root = d["nodes"][0]
     dropped = root["moves"][0]["action"]
     root["moves"] = root["moves"][1:]
@@ -251,8 +244,8 @@ def test_script_expecting_another_robot_move_stops(tmp_path: Path) -> None:
 
 def test_policy_that_does_not_fit_the_problem(tmp_path: Path) -> None:
     with pytest.raises(PolicyMismatch, match="opening"):
-        Executor(ehatp.load(QUAL), policy_of(P2))
-    d = policy_of(P2).to_dict()
+        Executor(ehatp.load(QUAL), solved(P2).policy)
+    d = solved(P2).policy.to_dict()
     first = d["nodes"][0]["moves"][0]
     d["nodes"][first["to"]]["worlds"] = 7
     ex = Executor(ehatp.load(P2), Policy.from_dict(d))
@@ -339,14 +332,9 @@ def test_policy_for_another_problem_is_bad_input(tmp_path: Path) -> None:
 
 # -- the API over every example --------------------------------------------------------------
 
-@pytest.mark.parametrize("path", sorted((ROOT / "examples").glob("*/*.toml")),
-                         ids=lambda p: f"{p.parent.name}/{p.stem}")
-def test_executor_follows_every_branch_of_every_example(path: Path) -> None:
-    problem = ehatp.load(path)
-    result = ehatp.solve(problem)
-    if result.policy is None:
-        pytest.skip(f"no policy: {result.reason}")
-    policy = result.policy
+@pytest.mark.parametrize("example", EXAMPLES, ids=str)
+def test_executor_follows_every_branch_of_every_example(example: Example) -> None:
+    problem, policy = solved(example)  # every example has a policy
     for branch in policy.branches():
         ex = Executor(problem, policy)
         while ex.in_opening:
