@@ -19,6 +19,8 @@ from ehatp.tools import bench
 from ehatp.tools.cli import app
 from ehatp.tools.examples import example, examples_dir
 
+from .conftest import TABLE1
+
 CUBES = examples_dir() / "cubes"
 P1 = CUBES / "p1.toml"
 runner = CliRunner()
@@ -255,6 +257,8 @@ def test_bench_json_has_nine_rows(tmp_path: Path) -> None:
     assert len(rows) == 9
     for x in rows:
         assert set(bench.REQUIRED_KEYS) <= x.keys()
+    registered = {e.table1.instance: e for e in TABLE1 if e.table1}
+    assert sorted(registered) == sorted(x["instance"] for x in rows)
     assert [x["paper_states"] for x in rows] == [218, 236, 1643, 2003, 4107, 5607, 603, 1054,
                                                  1800]
     assert rows[0]["paper_time_ms"] == 8900 and rows[5]["paper_time_ms"] == 12_530_000
@@ -262,6 +266,15 @@ def test_bench_json_has_nine_rows(tmp_path: Path) -> None:
         if x["solved"]:
             assert x["states"] >= x["distinct_states"] > 0 and x["time_ms"] > 0
             assert x["prototype_stored_ms"] > 0 and "speedup" not in x
+        # the figures the registry records, ours and the paper's
+        e = registered[x["instance"]]
+        t = e.table1
+        assert t is not None
+        assert (x["states"], x["distinct_states"], x["max_worlds"], x["leaves"], x["cost"],
+                x["communications"]) == (t.generated, t.distinct, e.worlds, e.leaves, e.cost,
+                                         e.communications), x["instance"]
+        assert (x["paper_states"], x["paper_max_worlds"], x["paper_leaves"]) == (
+            t.paper_states, t.paper_worlds, t.paper_leaves), x["instance"]
     assert r.exit_code == (0 if all(x["solved"] for x in rows) else 1)
     assert "P1" in r.stdout and "Cooking 3" in r.stdout
     # stored figures are labelled as such and no ratio against them is printed

@@ -4,16 +4,16 @@
 from __future__ import annotations
 
 from dataclasses import replace
-from pathlib import Path
 
 import pytest
 
 import ehatp
 from ehatp import Communication, HumanModel
 
+from .conftest import EXAMPLES_DIR, example, solved
 from .scenarios import lab_domain, problem, walk
 
-EX = Path(__file__).resolve().parents[1] / "examples" / "communication"
+EX = EXAMPLES_DIR / "communication"
 
 CASES = [
     ("starts-on-false-belief.toml", "speech", "inform(not jar_on(k1), jar_on(k2))"),
@@ -24,12 +24,12 @@ CASES = [
 
 @pytest.mark.parametrize(("name", "option", "said"), CASES)
 def test_option_solves_what_the_default_cannot(name: str, option: str, said: str) -> None:
-    p = ehatp.load(EX / name)
-    r = ehatp.solve(p)
-    assert r.policy is not None and r.optimal, r.reason
-    assert r.policy.communications == 1
-    assert said in {m.action for _, m in r.policy.edges()}
-    report = ehatp.validate(p, r.policy)
+    got = solved(EX / name)
+    p, policy = got
+    assert got.result.optimal, got.result.reason
+    assert policy.communications == 1 == example(f"communication/{name[:-5]}").communications
+    assert said in {m.action for _, m in policy.edges()}
+    report = ehatp.validate(p, policy)
     assert report.ok, report.message
     default = replace(p, communication=replace(p.communication, **{
         option: getattr(Communication(), option)}))

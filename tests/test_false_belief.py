@@ -4,14 +4,13 @@ cheaper; with informing made expensive, deferral must win."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import ehatp
 from ehatp.policy_format import PathStep, Policy
 
+from .conftest import EXAMPLES_DIR, example, solved
 from .scenarios import walk
 
-SA = Path(__file__).resolve().parents[1] / "examples" / "sally-anne"
+SA = EXAMPLES_DIR / "sally-anne"
 
 
 def leave_first(policy: Policy) -> list[PathStep]:
@@ -19,24 +18,22 @@ def leave_first(policy: Policy) -> list[PathStep]:
 
 
 def test_cheap_inform_tidies_unseen_then_informs_before_the_human_reaches() -> None:
-    p = ehatp.load(SA / "inform.toml")
-    r = ehatp.solve(p)
-    assert r.policy is not None and ehatp.validate(p, r.policy).ok
-    branch = [n.action for n in leave_first(r.policy)]
+    p, policy = solved("sally-anne/inform")
+    assert ehatp.validate(p, policy).ok
+    branch = [n.action for n in leave_first(policy)]
     assert branch[2] == "move(basket, box)"  # unseen: the human keeps a false belief
     back = branch.index("go(street, room)")
     assert branch[back + 1] == "inform(not ball_in(basket), ball_in(box))"
     assert branch[back + 2] == "take(box)"
     # the irrelevant divergence (the ball is clean) is never told
-    assert all("clean" not in n.action for b in r.policy.branches() for n in b)
+    assert all("clean" not in n.action for b in policy.branches() for n in b)
 
 
 def test_expensive_inform_defers_the_move_until_the_human_sees_it() -> None:
-    p = ehatp.load(SA / "defer.toml")
-    r = ehatp.solve(p)
-    assert r.policy is not None and ehatp.validate(p, r.policy).ok
-    assert r.policy.communications == 0
-    branch = leave_first(r.policy)
+    p, policy = solved("sally-anne/defer")
+    assert ehatp.validate(p, policy).ok
+    assert policy.communications == 0 == example("sally-anne/defer").communications
+    branch = leave_first(policy)
     move = next(n for n in branch if n.action == "move(basket, box)")
     assert move.copresent and move.worlds == 1  # done in front of the human
 

@@ -5,7 +5,6 @@ move costs, and the same policies with it as without it."""
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -21,11 +20,8 @@ from ehatp.search.symmetry import detect
 from ehatp.search.values import knuth
 from ehatp.tools import randomgen
 
+from .conftest import EXAMPLES_DIR, TABLE1, Example
 from .scenarios import problem, walk
-
-ROOT = Path(__file__).resolve().parents[1]
-TABLE1 = [f"cubes/p{i}.toml" for i in range(1, 7)] + [f"cooking/cooking{i}.toml"
-                                                      for i in range(1, 4)]
 
 
 def chores() -> Domain:
@@ -122,9 +118,9 @@ def test_done_conditions_cost_nothing() -> None:
     sem, es = walk(robot_only(["tidy(o1)", "c(o2)"]))
     assert Heuristic(sem.g)(es) == 0
     # Table 1's agendas are tasks with done-conditions: no bound at the root
-    for name in TABLE1:
-        sem, es = walk(ehatp.load(ROOT / "examples" / name))
-        assert Heuristic(sem.g)(es) == 0, name
+    for example in TABLE1:
+        sem, es = walk(ehatp.load(example.path))
+        assert Heuristic(sem.g)(es) == 0, example.name
 
 
 def test_a_task_that_never_finishes_is_infinite() -> None:
@@ -165,9 +161,10 @@ def _policy(p: ehatp.Problem, on: bool, monkeypatch: pytest.MonkeyPatch,
     return r.status, json.dumps(data, sort_keys=True)
 
 
-@pytest.mark.parametrize("name", TABLE1)
-def test_table1_policies_do_not_change(name: str, monkeypatch: pytest.MonkeyPatch) -> None:
-    p = ehatp.load(ROOT / "examples" / name)
+@pytest.mark.parametrize("example", TABLE1, ids=str)
+def test_table1_policies_do_not_change(example: Example, monkeypatch: pytest.MonkeyPatch
+                                       ) -> None:
+    p = ehatp.load(example.path)
     for symmetry in (True, False):
         assert _policy(p, True, monkeypatch, symmetry) == _policy(p, False, monkeypatch,
                                                                   symmetry)
@@ -187,7 +184,7 @@ def test_random_policies_do_not_change(monkeypatch: pytest.MonkeyPatch) -> None:
 
 def test_the_bound_does_not_change_under_renaming() -> None:
     """Computed on the lifted models, the bound of a state is its canonical form's (§3)."""
-    p = ehatp.load(ROOT / "examples" / "cubes" / "x1-4cubes-k2.toml")
+    p = ehatp.load(EXAMPLES_DIR / "cubes" / "x1-4cubes-k2.toml")
     g = ground_problem(p)
     sym = detect(g)
     assert sym is not None

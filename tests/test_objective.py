@@ -18,10 +18,10 @@ from ehatp.search.planner import Result
 from ehatp.tools.cli import app
 from ehatp.tools.examples import examples_dir
 
+from .conftest import EXAMPLES, Example
 from .scenarios import lab_domain, problem
 
 WORST, EXPECTED = ObjectiveKind.WORST_CASE, ObjectiveKind.EXPECTED
-EXAMPLES = sorted(examples_dir().glob("**/*.toml"))
 
 
 # --- a hand-derived choice ------------------------------------------------------------------
@@ -199,9 +199,9 @@ def with_kind(p: Problem, kind: ObjectiveKind) -> Problem:
     return dataclasses.replace(p, objective=dataclasses.replace(p.objective, kind=kind))
 
 
-@pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: f"{p.parent.name}/{p.stem}")
-def test_expected_optimum_on_every_example(path: Path) -> None:
-    p = ehatp.load(path)
+@pytest.mark.parametrize("example", EXAMPLES, ids=str)
+def test_expected_optimum_on_every_example(example: Example) -> None:
+    p = ehatp.load(example.path)
     _, ex = solved(with_kind(p, EXPECTED))
     _, wc = solved(with_kind(p, WORST))
     report = ehatp.validate(with_kind(p, EXPECTED), ex)  # recomputes both values (§7)

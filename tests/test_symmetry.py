@@ -5,7 +5,6 @@ same costs as the full one with policies that validate on the real problem."""
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 import pytest
 
@@ -18,9 +17,7 @@ from ehatp.search.planner import solve
 from ehatp.search.symmetry import Symmetry, describe_classes, detect
 from ehatp.tools.bench import GridPoint
 
-ROOT = Path(__file__).resolve().parent.parent
-EXAMPLES = sorted((ROOT / "examples").glob("*/*.toml"))
-
+from .conftest import EXAMPLES, ROOT, Example
 
 VARIABLES = 'encoding = "variables"\n'
 
@@ -118,9 +115,9 @@ def test_apply_and_inverse() -> None:
     assert sym.apply(sym.inverse(s), other) == es
 
 
-@pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: f"{p.parent.name}/{p.stem}")
-def test_same_cost_with_and_without_symmetry(path: Path) -> None:
-    p = load(path)
+@pytest.mark.parametrize("example", EXAMPLES, ids=str)
+def test_same_cost_with_and_without_symmetry(example: Example) -> None:
+    p = load(example.path)
     off, on = solve(p, symmetry=False), solve(p, symmetry=True)
     assert on.status == off.status
     if off.policy is None:

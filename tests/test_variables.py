@@ -30,7 +30,9 @@ from ehatp.epistemic.state import normalize
 from ehatp.model.grounding import ground_problem
 from ehatp.model.problem import loads
 
-CUBES = Path(__file__).resolve().parent.parent / "examples" / "cubes"
+from .conftest import CUBES_TABLE1, EXAMPLES_DIR, ROOT, example, solved
+
+CUBES = EXAMPLES_DIR / "cubes"
 
 
 def pasta_domain(*, variables: bool = True, sight: str = "here", places: int = 2) -> Domain:
@@ -209,8 +211,8 @@ def test_a_value_no_world_has_is_revised_to_the_value() -> None:
 DOMAIN_PY = '''
 from ehatp import domain_factory
 import sys
-sys.path.insert(0, {tests!r})
-from test_variables import pasta_domain
+sys.path.insert(0, {root!r})
+from tests.test_variables import pasta_domain
 
 @domain_factory
 def make(variables: bool = True, sight: str = "here", places: int = 2):
@@ -219,7 +221,7 @@ def make(variables: bool = True, sight: str = "here", places: int = 2):
 
 
 def write(tmp_path: Path, body: str, beliefs: str = "") -> Path:
-    (tmp_path / "domain.py").write_text(DOMAIN_PY.format(tests=str(Path(__file__).parent)),
+    (tmp_path / "domain.py").write_text(DOMAIN_PY.format(root=str(ROOT)),
                                         encoding="utf-8")
     f = tmp_path / "pasta.toml"
     f.write_text(f"""[problem]
@@ -335,14 +337,16 @@ def to_variables(text: str) -> str:
     return text.replace("[domain]\n", '[domain]\nencoding = "variables"\n', 1)
 
 
-@pytest.mark.parametrize("name", ["p1", "p2", "p3", "p4", "p5", "p6"])
+@pytest.mark.parametrize("name", [e.stem for e in CUBES_TABLE1])
 def test_table1_is_unchanged_with_the_cube_domain_in_variables(name: str) -> None:
     f = CUBES / f"{name}.toml"
     text = f.read_text(encoding="utf-8")
-    atoms, variables = loads(text, f), loads(to_variables(text), f)
+    variables = loads(to_variables(text), f)
     assert variables.domain.name.startswith("cubes-vars")
-    a, v = ehatp.solve(atoms), ehatp.solve(variables)
+    a, v = solved(f).result, ehatp.solve(variables)
     assert a.policy is not None and v.policy is not None
+    assert (a.policy.cost, a.policy.leaves, a.policy.communications) == (
+        example(name).cost, example(name).leaves, example(name).communications)
     assert ehatp.validate(variables, v.policy).ok
     for key in ("cost", "leaves", "communications"):
         assert getattr(v.policy, key) == getattr(a.policy, key), key
