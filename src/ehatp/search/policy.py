@@ -8,9 +8,8 @@ from typing import Any
 
 from ..epistemic.semantics import ACTION, WAIT, Move, bits_of
 from ..epistemic.state import HUMAN, ROBOT, EState
-from ..model.htn import Agenda
 from ..model.options import Objective, ObjectiveKind
-from ..model.problem import Cost
+from ..model.problem import Cost, Problem
 from ..policy_format import Policy, PolicyMove, PolicyNode, num, topological_order
 from .graph import DEAD, EXPANDED, GOAL, OPEN, Edge, Graph, move_key
 from .values import Values, weighted_mean
@@ -19,9 +18,9 @@ from .values import Values, weighted_mean
 def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
             optimal: bool = True, stats: dict[str, Any] | None = None,
             check: Callable[[], None] | None = None) -> Policy:
-    """The policy the values chose, from ``root``, as a graph (docs/policy-format.md): one
-    policy node per search node the policy reaches, memoised by search node, so the work and
-    the file are linear in the policy's distinct states however many branches share them.
+    """Return the policy the values chose, from ``root``, as a graph (docs/policy-format.md):
+    one policy node per search node the policy reaches, memoised by search node, so the work
+    and the file are linear in the policy's distinct states however many branches share them.
     Node ids are the depth-first preorder of first visits, moves in canonical order.
 
     Both costs of §7 are computed again on the extracted graph: its worst case (the maximum over
@@ -30,14 +29,8 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
     are counted over the graph too (:meth:`Policy.count_branches`). ``check`` (e.g. a time
     limit's, docs/semantics.md §7 "Search") is called once per policy node and may raise to
     stop the work."""
-    sem = gr.sem
     if check is None:
-        def check() -> None:
-            pass
-
-    g = sem.g
-    p = g.problem
-    r_name, h_name = p.domain.robot_name, p.domain.human_name
+        check = _no_check
 
     def chosen(n: int) -> list[Edge]:
         if gr.status[n] == GOAL:
@@ -45,54 +38,88 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
         edges = gr.edges[n]
         return [edges[values.choice[n]]] if gr.is_robot(n) else list(edges)
 
-    # depth-first, first visits in preorder: a node reached again is not expanded again
-    order: list[int] = []
-    index: dict[int, int] = {}
-    stack = [root]
-    while stack:
-        n = stack.pop()
-        if n in index:
-            continue
-        check()
-        index[n] = len(order)
-        order.append(n)
-        stack.extend(e.child for e in reversed(chosen(n)))
-
-    def agenda(ag: Agenda) -> list[str]:  # a partially ordered block as {a | b} (§1)
-        return sem.net.names_of(ag)
-
-    def move_of(e: Edge) -> PolicyMove:
-        move: Move = e.move
-        name, call_args, label = sem.describe(move)
-        told: list[str] = []
-        if move.kind in (ACTION, WAIT) and move.atoms:  # said with a move (§5): as it is after
-            assert move.child is not None
-            told = list(sem.literals(move.child.true, move.atoms))
-        return PolicyMove(agent=r_name if move.agent == ROBOT else h_name, kind=move.kind,
-                          action=label, name=name, args=list(call_args), cost=move.cost,
-                          to=index[e.child], told=told)
-
+    order = _preorder(root, chosen, check)
+    index = {n: i for i, n in enumerate(order)}
     nodes: list[PolicyNode] = []
     for i, n in enumerate(order):
         check()
-        es: EState = gr.states[n]
-        t = es.true
-        div = 0
-        diffs = []
-        for s in sorted({s for s, _ in es.worlds}):
-            div |= s ^ t
-            diffs.append(g.world_diff(s, t))
-        goal = gr.status[n] == GOAL
-        nodes.append(PolicyNode(
-            id=i, copresent=sem.copresent(t), k=es.k, worlds=len(es.worlds),
-            divergence=([g.atoms[b] if t >> b & 1 else f"not {g.atoms[b]}" for b in bits_of(div)]
-                        if not div & g.multi_mask else g.literals(t, div)),  # values whole
-            world_diffs=diffs, state=g.state_atoms(t), robot_agenda=agenda(es.robot_agenda),
-            human_agenda=agenda(es.human_agendas[0]),
-            to_move=None if goal else (r_name if es.turn == ROBOT else h_name),
-            value=0, goal=goal, moves=[move_of(e) for e in chosen(n)],
-            hypotheses=([agenda(h) for h in es.human_agendas] if len(es.human_agendas) > 1
-                        else [])))
+        nodes.append(_policy_node(gr, i, n, [_policy_move(gr, e, index) for e in chosen(n)]))
+    return _policy(gr.sem.g.problem, problem_name, nodes, optimal, stats or {})
+
+
+def _no_check() -> None:
+    """The ``check`` of extraction and realisation when no limit is watched."""
+
+
+def _preorder(root: int, chosen: Callable[[int], list[Edge]],
+              check: Callable[[], None]) -> list[int]:
+    """Return the search nodes the policy reaches from ``root`` through the ``chosen`` edges,
+    depth first, in the preorder of first visits (a node reached again is not expanded
+    again): the policy's node ids."""
+    order: list[int] = []
+    seen: set[int] = set()
+    stack = [root]
+    while stack:
+        n = stack.pop()
+        if n in seen:
+            continue
+        check()
+        seen.add(n)
+        order.append(n)
+        stack.extend(e.child for e in reversed(chosen(n)))
+    return order
+
+
+def _policy_move(gr: Graph, e: Edge, index: dict[int, int]) -> PolicyMove:
+    """Return the edge ``e`` as a policy move (docs/policy-format.md): the agent's name, the
+    move's kind, label, name and arguments, cost, the policy node it leads to (``index``: by
+    search node) and what was said with it (§5, as it is after the move)."""
+    sem = gr.sem
+    move: Move = e.move
+    name, call_args, label = sem.describe(move)
+    told: list[str] = []
+    if move.kind in (ACTION, WAIT) and move.atoms:  # said with a move (§5): as it is after
+        assert move.child is not None
+        told = list(sem.literals(move.child.true, move.atoms))
+    return PolicyMove(agent=sem.names[move.agent], kind=str(move.kind), action=label,
+                      name=str(name), args=list(call_args), cost=move.cost, to=index[e.child],
+                      told=told)
+
+
+def _policy_node(gr: Graph, i: int, n: int, moves: list[PolicyMove]) -> PolicyNode:
+    """Return search node ``n`` as policy node ``i`` with its ``moves``: the recorded facts
+    of its state (docs/policy-format.md; the agendas with partially ordered blocks as
+    ``{a | b}``, §1), its value left 0 (see :func:`_policy`)."""
+    sem = gr.sem
+    grounded = sem.g
+    es: EState = gr.states[n]
+    t = es.true
+    div = 0
+    diffs = []
+    for s in sorted({s for s, _ in es.worlds}):
+        div |= s ^ t
+        diffs.append(grounded.world_diff(s, t))
+    goal = gr.status[n] == GOAL
+    if not div & grounded.multi_mask:
+        divergence = [grounded.atoms[b] if t >> b & 1 else f"not {grounded.atoms[b]}"
+                      for b in bits_of(div)]
+    else:  # a variable or counter told whole
+        divergence = grounded.literals(t, div)
+    return PolicyNode(
+        id=i, copresent=sem.copresent(t), k=es.k, worlds=len(es.worlds), divergence=divergence,
+        world_diffs=diffs, state=grounded.state_atoms(t),
+        robot_agenda=sem.net.names_of(es.robot_agenda),
+        human_agenda=sem.net.names_of(es.human_agendas[0]),
+        to_move=None if goal else sem.names[es.turn], value=0, goal=goal, moves=moves,
+        hypotheses=([sem.net.names_of(h) for h in es.human_agendas]
+                    if len(es.human_agendas) > 1 else []))
+
+
+def _policy(p: Problem, problem_name: str, nodes: list[PolicyNode], optimal: bool,
+            stats: dict[str, Any]) -> Policy:
+    """Return the policy of ``nodes`` for problem ``p``: its costs and objective as the file
+    records them, each node's value and the policy's cost under the objective (§7, computed
+    on the graph), both costs, and its branches and communications counted."""
     costs = {"inform": num(p.costs.inform), "ask": num(p.costs.ask),
              "wait": num(p.costs.wait), "pass": num(p.costs.pass_),
              "actions": {k: num(v) for k, v in sorted(p.costs.actions.items())}}
@@ -104,8 +131,9 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
     objective = {"kind": obj.kind.value,
                  "weights": {k: num(v) for k, v in sorted(obj.weights.items())},
                  "ties": [str(t) for t in obj.ties]}
-    policy = Policy(problem_name, p.domain.name, {"robot": r_name, "human": h_name}, p.K,
-                    costs, nodes, own[0], 0, 0, optimal, stats or {}, list(p.after), objective,
+    policy = Policy(problem_name, p.domain.name, {"robot": p.domain.robot_name,
+                                                  "human": p.domain.human_name}, p.K,
+                    costs, nodes, own[0], 0, 0, optimal, stats, list(p.after), objective,
                     worst[0], mean[0])
     policy.leaves = policy.count_branches()
     policy.communications = policy.count_communications()
@@ -131,8 +159,7 @@ def realise(gr: Graph, root: int, values: Values,
     sym, sem = gr.sym, gr.sem
     assert sym is not None
     if check is None:
-        def check() -> None:
-            pass
+        check = _no_check
     watch = getattr(sem, "watch", None)
     if watch is not None:
         sem.watch = False  # type: ignore[attr-defined]  # real states: their own decisions

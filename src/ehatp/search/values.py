@@ -37,9 +37,9 @@ from fractions import Fraction
 
 from ..epistemic.semantics import ACTION, ANNOUNCE, ASK, INFORM, WAIT, Move
 from ..epistemic.state import ROBOT
-from ..model.options import Objective, ObjectiveKind
+from ..model.options import Objective, ObjectiveKind, TieKey
 from ..model.problem import Cost
-from .graph import GOAL, Graph
+from .graph import GOAL, Edge, Graph
 from .limits import Budget
 
 INF = float("inf")
@@ -295,17 +295,24 @@ def expected_order(gr: Graph, root: int, worst: list[Cost | float], pos: list[in
             exact = no component has a cycle
             return E, choice, exact
     """
-    n_nodes = len(worst)
-    kids: dict[int, list[int]] = {}
+    def solvable_children(n: int) -> list[int]:
+        return [e.child for e in gr.edges[n] if e.child >= 0 and worst[e.child] != INF]
 
-    def children(n: int) -> list[int]:
-        ks = kids.get(n)
-        if ks is None:
-            ks = kids[n] = [e.child for e in gr.edges[n]
-                            if e.child >= 0 and worst[e.child] != INF]
-        return ks
+    order, comp, exact = _components(root, len(worst), solvable_children, pos, budget)
 
-    # Tarjan's strongly connected components, iteratively; components come out children first
+    def allowed(n: int, c: int) -> bool:
+        return worst[c] != INF and (comp[c] != comp[n] or pos[c] < pos[n])
+
+    return order, allowed, exact
+
+
+def _components(root: int, n_nodes: int, children: Callable[[int], list[int]],
+                pos: list[int], budget: Budget | None) -> tuple[list[int], list[int], bool]:
+    """Return the strongly connected components of the graph ``children`` spans from
+    ``root`` (Tarjan's algorithm, iteratively): their members, children's components first,
+    each component's members by ``pos``; each node's component (-1: not reached); and whether
+    no component has a cycle."""
+    kids: dict[int, list[int]] = {}  # the children of the nodes on the work stack
     index = [-1] * n_nodes
     low = [0] * n_nodes
     on_stack = bytearray(n_nodes)
@@ -325,7 +332,9 @@ def expected_order(gr: Graph, root: int, worst: list[Cost | float], pos: list[in
         if budget is not None and not steps & CHECK_EVERY:
             budget.check()
         n, i = work[-1]
-        ks = children(n)
+        ks = kids.get(n)
+        if ks is None:
+            ks = kids[n] = children(n)
         if i < len(ks):
             work[-1] = (n, i + 1)
             c = ks[i]
@@ -357,12 +366,7 @@ def expected_order(gr: Graph, root: int, worst: list[Cost | float], pos: list[in
         members.sort(key=pos.__getitem__)
         order.extend(members)
         n_comps += 1
-    del index, low, on_stack
-
-    def allowed(n: int, c: int) -> bool:
-        return worst[c] != INF and (comp[c] != comp[n] or pos[c] < pos[n])
-
-    return order, allowed, exact
+    return order, comp, exact
 
 
 def _choose(gr: Graph, order: list[int], allowed: Callable[[int, int], bool], obj: Objective,
@@ -370,114 +374,158 @@ def _choose(gr: Graph, order: list[int], allowed: Callable[[int, int], bool], ob
             ) -> tuple[dict[int, int], list[Cost | None] | None]:
     """Visit ``order`` (children before parents): pick each robot node's option among the
     ``allowed`` ones by the objective's value, then the tie keys, then canonical order; total
-    each chosen sub-policy (§7 ties: communications, waits, leaves and their summed length,
-    worst case, expected cost), in arrays indexed by node. Returns the choices and the
-    expected costs (None unless ``need_mean``)."""
-    expected = obj.kind == ObjectiveKind.EXPECTED
-    ties = obj.ties
+    each chosen sub-policy (:class:`_Totals`). Return the choices and the expected costs
+    (None unless ``need_mean``).
+
+    In GTPyhop-style pseudo-code::
+
+        choose(order):
+            for n in order:
+                if n is a goal: totals(n) = a leaf
+                elif the robot moves at n:
+                    choice(n) = argmin over allowed options m of
+                                (cost(m) + value(child(m)), tie keys, canonical order)
+                    totals(n) = totals(child(choice(n))) plus the move
+                else:
+                    totals(n) = the sums (worst case: the maximum; expected: the weighted
+                                mean) over every branch m of totals(child(m)) plus the move
+    """
     weights: dict[str, Fraction] = {}
 
-    def weight(m: Move) -> Fraction:
-        w = weights.get(m.label)
+    def weight(move: Move) -> Fraction:
+        w = weights.get(move.label)
         if w is None:
-            w = weights[m.label] = obj.weight(m.label, gr.sem.describe(m).name)
+            w = weights[move.label] = obj.weight(move.label, gr.sem.describe(move).name)
         return w
 
-    n_nodes = len(gr.states)
-    comms = [0] * n_nodes
-    waits = [0] * n_nodes
-    leaves = [0] * n_nodes
-    length = [0] * n_nodes  # sum over leaves of their distance (in moves) from the node
-    worst: list[Cost] = [0] * n_nodes
-    mean: list[Cost | None] | None = [None] * n_nodes if need_mean else None
-    done = bytearray(n_nodes)
-
-    def tie_key(m: Move, c: int) -> tuple[object, ...]:
-        """The tie keys of the option ``m`` to ``c``, as seen from its parent."""
-        out: list[object] = []
-        for k in ties:
-            if k == "communications":
-                out.append(comms[c] + (1 if speaks(m) else 0))
-            elif k == "waits":
-                out.append(waits[c] + (1 if m.waits else 0))
-            elif k == "length":
-                out.append(Fraction(length[c] + leaves[c], leaves[c]))
-            elif k == "worst-case":
-                out.append(m.cost + worst[c])
-            else:  # expected
-                assert mean is not None
-                mc = mean[c]
-                out.append(None if mc is None else m.cost + mc)
-        return tuple(out)
-
+    totals = _Totals(len(gr.states), need_mean, obj)
+    done = bytearray(len(gr.states))
     choice: dict[int, int] = {}
     status, states = gr.status, gr.states
     for step, n in enumerate(order):
         if budget is not None and not step & CHECK_EVERY:
             budget.check()
         done[n] = 1
-        if status[n] == GOAL:
-            leaves[n] = 1
-            if mean is not None:
-                mean[n] = 0
-            continue
         edges = gr.edges[n]
-        if states[n].turn == ROBOT:  # robot: the best allowed option
-            best_i = -1
-            best_v: Cost = 0
-            best_k: tuple[object, ...] | None = None
-            for i, e in enumerate(edges):
-                c = e.child
-                if c < 0 or not done[c] or not allowed(n, c):
-                    continue
-                m = e.move
-                if expected:
-                    assert mean is not None
-                    mc = mean[c]
-                    assert mc is not None
-                    v = m.cost + mc
-                else:
-                    v = m.cost + worst[c]
-                if best_i < 0 or v < best_v:
-                    best_i, best_v, best_k = i, v, None
-                elif v == best_v and ties:
-                    if best_k is None:
-                        b = edges[best_i]
-                        best_k = tie_key(b.move, b.child)
-                    k = tie_key(m, c)
-                    if k < best_k:
-                        best_i, best_k = i, k
-            assert best_i >= 0
-            choice[n] = best_i
-            e = edges[best_i]
-            c, m = e.child, e.move
-            comms[n] = comms[c] + (1 if speaks(m) else 0)
-            waits[n] = waits[c] + (1 if m.waits else 0)
-            leaves[n] = leaves[c]
-            length[n] = length[c] + leaves[c]
-            worst[n] = m.cost + worst[c]
-            if mean is not None:
+        if status[n] == GOAL:
+            totals.goal(n)
+        elif states[n].turn == ROBOT:
+            i = choice[n] = totals.best_option(n, edges, done, allowed)
+            totals.take(n, edges[i])
+        else:
+            totals.branches(n, edges, weight)
+    return choice, totals.mean
+
+
+class _Totals:
+    """The chosen sub-policy below each node, totalled in arrays indexed by node for the
+    choices and their tie keys (§7, "Ties"): its communications, waits, leaves and their summed
+    length (in moves from the node), worst-case cost and, when ``need_mean``, expected cost."""
+
+    def __init__(self, n_nodes: int, need_mean: bool, obj: Objective) -> None:
+        self.expected = obj.kind == ObjectiveKind.EXPECTED
+        self.ties = obj.ties
+        self.comms = [0] * n_nodes
+        self.waits = [0] * n_nodes
+        self.leaves = [0] * n_nodes
+        self.length = [0] * n_nodes  # sum over leaves of their distance (in moves)
+        self.worst: list[Cost] = [0] * n_nodes
+        self.mean: list[Cost | None] | None = [None] * n_nodes if need_mean else None
+
+    def tie_key(self, move: Move, c: int) -> tuple[object, ...]:
+        """Return the tie keys of the option ``move`` to ``c``, as seen from its parent."""
+        out: list[object] = []
+        for k in self.ties:
+            if k == TieKey.COMMUNICATIONS:
+                out.append(self.comms[c] + (1 if speaks(move) else 0))
+            elif k == TieKey.WAITS:
+                out.append(self.waits[c] + (1 if move.waits else 0))
+            elif k == TieKey.LENGTH:
+                out.append(Fraction(self.length[c] + self.leaves[c], self.leaves[c]))
+            elif k == TieKey.WORST_CASE:
+                out.append(move.cost + self.worst[c])
+            else:  # expected
+                assert self.mean is not None
+                mc = self.mean[c]
+                out.append(None if mc is None else move.cost + mc)
+        return tuple(out)
+
+    def goal(self, n: int) -> None:
+        """A goal: one leaf, nothing left to pay."""
+        self.leaves[n] = 1
+        if self.mean is not None:
+            self.mean[n] = 0
+
+    def best_option(self, n: int, edges: tuple[Edge, ...], done: bytearray,
+                    allowed: Callable[[int, int], bool]) -> int:
+        """Return the index of robot node ``n``'s best option among the ``allowed`` edges to
+        ``done`` children: least value under the objective, then least tie keys, then first
+        in canonical order."""
+        best_i = -1
+        best_v: Cost = 0
+        best_k: tuple[object, ...] | None = None
+        worst, mean = self.worst, self.mean
+        for i, e in enumerate(edges):
+            c = e.child
+            if c < 0 or not done[c] or not allowed(n, c):
+                continue
+            move = e.move
+            if self.expected:
+                assert mean is not None
                 mc = mean[c]
-                mean[n] = None if mc is None else m.cost + mc
-        else:  # human: every branch
-            sc = sw = sl = slen = 0
-            wc: Cost = 0
-            for e in edges:
-                c, m = e.child, e.move
-                sc += comms[c] + (1 if speaks(m) else 0)
-                sw += waits[c] + (1 if m.waits else 0)
-                sl += leaves[c]
-                slen += length[c] + leaves[c]
-                x = m.cost + worst[c]
-                if x > wc:
-                    wc = x
-            comms[n], waits[n], leaves[n], length[n], worst[n] = sc, sw, sl, slen, wc
-            if mean is not None:
-                ms = [mean[e.child] for e in edges]
-                mean[n] = weighted_mean([weight(e.move) for e in edges],
-                                        [e.move.cost + mc for e, mc in zip(edges, ms, strict=True)
-                                         if mc is not None])
-    return choice, mean
+                assert mc is not None
+                v = move.cost + mc
+            else:
+                v = move.cost + worst[c]
+            if best_i < 0 or v < best_v:
+                best_i, best_v, best_k = i, v, None
+            elif v == best_v and self.ties:
+                if best_k is None:
+                    b = edges[best_i]
+                    best_k = self.tie_key(b.move, b.child)
+                k = self.tie_key(move, c)
+                if k < best_k:
+                    best_i, best_k = i, k
+        assert best_i >= 0
+        return best_i
+
+    def take(self, n: int, e: Edge) -> None:
+        """Robot node ``n`` takes the option ``e``: its totals are the child's plus the
+        move."""
+        c, move = e.child, e.move
+        self.comms[n] = self.comms[c] + (1 if speaks(move) else 0)
+        self.waits[n] = self.waits[c] + (1 if move.waits else 0)
+        self.leaves[n] = self.leaves[c]
+        self.length[n] = self.length[c] + self.leaves[c]
+        self.worst[n] = move.cost + self.worst[c]
+        if self.mean is not None:
+            mc = self.mean[c]
+            self.mean[n] = None if mc is None else move.cost + mc
+
+    def branches(self, n: int, edges: tuple[Edge, ...],
+                 weight: Callable[[Move], Fraction]) -> None:
+        """Human node ``n``: its totals are the sums over every branch (the worst case
+        their maximum, the expected cost their mean by ``weight``)."""
+        comms, waits, leaves, length, worst = (self.comms, self.waits, self.leaves,
+                                               self.length, self.worst)
+        sc = sw = sl = slen = 0
+        wc: Cost = 0
+        for e in edges:
+            c, move = e.child, e.move
+            sc += comms[c] + (1 if speaks(move) else 0)
+            sw += waits[c] + (1 if move.waits else 0)
+            sl += leaves[c]
+            slen += length[c] + leaves[c]
+            x = move.cost + worst[c]
+            if x > wc:
+                wc = x
+        comms[n], waits[n], leaves[n], length[n], worst[n] = sc, sw, sl, slen, wc
+        mean = self.mean
+        if mean is not None:
+            ms = [mean[e.child] for e in edges]
+            mean[n] = weighted_mean([weight(e.move) for e in edges],
+                                    [e.move.cost + mc for e, mc in zip(edges, ms, strict=True)
+                                     if mc is not None])
 
 
 def weighted_mean(weights: list[Fraction], xs: list[Cost]) -> Cost:
@@ -486,6 +534,8 @@ def weighted_mean(weights: list[Fraction], xs: list[Cost]) -> Cost:
     return int(m) if isinstance(m, Fraction) and m.denominator == 1 else m
 
 
-def speaks(m: Move) -> bool:
-    """A communication (§7 ties): ``inform``, ``ask``, or a move that speaks while acting."""
-    return m.kind in (INFORM, ASK, ANNOUNCE) or (m.kind in (ACTION, WAIT) and m.atoms != 0)
+def speaks(move: Move) -> bool:
+    """Return whether ``move`` is a communication (§7, "Ties"): ``inform``, ``ask``,
+    ``announce``, or a move that speaks while acting."""
+    return move.kind in (INFORM, ASK, ANNOUNCE) or (move.kind in (ACTION, WAIT)
+                                                    and move.atoms != 0)
