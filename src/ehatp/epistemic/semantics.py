@@ -15,7 +15,7 @@ from itertools import combinations
 from typing import NamedTuple
 
 from ..model.formula import And, Formula, conj, ground_atoms
-from ..model.grounding import FINISH, GOp, Grounded, no_check
+from ..model.grounded import FINISH, GOp, Grounded, no_check
 from ..model.htn import Agenda, Networks, Refiner
 from ..model.options import InformWhere, Intentions, Passes, Relevance, Speech
 from ..model.problem import Cost

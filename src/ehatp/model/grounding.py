@@ -7,7 +7,6 @@ order are canonical: the planner's output does not depend on declaration order.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any, TypeVar
 
@@ -46,220 +45,8 @@ from .formula import (
     simplify_or,
     substitute,
 )
+from .grounded import FINISH, GMethod, GModel, GOp, Grounded, _low, bits, no_check
 from .problem import Cost, Problem, call_str
-
-FINISH = -1
-"""Pseudo task id: the agenda can be completed (nothing left to do)."""
-
-
-@dataclass(frozen=True, slots=True, eq=False)
-class GOp:
-    """A ground primitive action of one agent model."""
-
-    id: int
-    name: str
-    schema: str
-    args: tuple[str, ...]
-    pre_f: Formula
-    pre: StateFn
-    add: int
-    dele: int
-    cond: tuple[tuple[StateFn, int, int], ...]
-    cost: Cost
-    done_f: Formula | None
-    done: StateFn | None
-
-    def apply(self, s: int) -> int:
-        add, dele = self.add, self.dele
-        for fn, a, d in self.cond:
-            if fn(s):
-                add |= a
-                dele |= d
-        return (s & ~dele) | add
-
-
-@dataclass(frozen=True, slots=True, eq=False)
-class GMethod:
-    name: str
-    pre_f: Formula
-    pre: StateFn
-    subtasks: tuple[int, ...]
-    # partial order: each subtask's predecessors (bitmask over subtasks, transitively closed);
-    # None: the subtasks in the order listed (docs/semantics.md §1)
-    order: tuple[int, ...] | None = None
-
-
-@dataclass(eq=False)
-class GModel:
-    """A ground agent model: task id -> primitive action or (done condition, methods)."""
-
-    agent: str
-    ops: dict[int, GOp] = field(default_factory=dict)
-    methods: dict[int, tuple[GMethod, ...]] = field(default_factory=dict)
-    done: dict[int, tuple[Formula, StateFn]] = field(default_factory=dict)
-    # grounded on demand: a task reached but not yet grounded is grounded when one of the
-    # three tables is first asked about it; the tables then hold only what was asked for
-    lazy: bool = False
-
-
-@dataclass(eq=False)
-class Grounded:
-    """Everything the planner needs, in compact form."""
-
-    problem: Problem
-    atoms: list[str]
-    atom_index: dict[str, int]
-    task_names: list[str]
-    task_index: dict[str, int]
-    robot: GModel
-    human: GModel
-    robot_seen_by_human: GModel
-    init: int
-    beliefs: list[tuple[int, tuple[int, ...]]]
-    robot_agenda: tuple[int, ...]
-    human_agenda: tuple[int, ...]
-    visible: list[tuple[StateFn, int]]
-    observable_mask: int
-    inferable_mask: int
-    hidden_mask: int
-    copresent_f: Formula
-    copresent: StateFn
-    goal_f: Formula
-    goal: StateFn
-    fns: dict[Formula, StateFn]
-    display: dict[Formula, str]
-    # finite-domain variables (one-hot: one bit per value, exactly one set) and counters
-    # (binary: one bit per power of two), each a *unit* of several bits (docs/semantics.md §2)
-    var_units: tuple[int, ...] = ()
-    counter_units: tuple[int, ...] = ()
-    unit_names: dict[int, str] = field(default_factory=dict)  # unit mask -> "loc(r)"
-    counter_max: dict[int, int] = field(default_factory=dict)  # counter mask -> max
-    multi_mask: int = 0  # the bits of every variable and counter
-    unit_of: dict[int, int] = field(default_factory=dict)  # bit index -> its unit's mask
-
-    def compile(self, f: Formula) -> StateFn:
-        fn = self.fns.get(f)
-        if fn is None:
-            fn = self.fns[f] = compile_ground(f)
-        return fn
-
-    # -- units: a plain atom is one bit; a variable or a counter is all of its bits --
-    def unit(self, i: int) -> int:
-        """The mask of the unit bit ``i`` belongs to (§2)."""
-        return self.unit_of.get(i, 1 << i)
-
-    def expand(self, m: int) -> int:
-        """§2, §4: ``m`` with every variable and counter it touches made whole (what the
-        human learns of an inferable unit whose value an action changed)."""
-        if not m & self.multi_mask:
-            return m
-        for i in bits(m & self.multi_mask):
-            m |= self.unit_of[i]
-        return m
-
-    def units(self, m: int) -> list[int]:
-        """§2, §5: the (whole) units ``m`` touches, by their lowest bit: the candidates of an
-        informing set, the order of observation."""
-        if not m & self.multi_mask:
-            return [1 << i for i in bits(m)]
-        out: list[int] = []
-        seen = 0
-        for i in bits(m):
-            if not seen >> i & 1:
-                u = self.unit(i)
-                seen |= u
-                out.append(u)
-        return out
-
-    def is_counter(self, unit: int) -> bool:
-        """§2: whether ``unit`` is a counter (else an atom or a state variable)."""
-        return unit in self.counter_max
-
-    def counter_value(self, s: int, unit: int) -> int:
-        """§2: the value of the counter ``unit`` in ``s`` (its bits, lowest first)."""
-        return (s & unit) >> _low(unit)
-
-    def fact(self, s: int, unit: int) -> str:
-        """§2: what ``s`` says of a variable or counter: ``loc(r) = mt``, ``balls(b1) = 2``."""
-        if unit in self.counter_max:
-            return f"{self.unit_names[unit]} = {self.counter_value(s, unit)}"
-        on = s & unit
-        return self.atoms[_low(on)] if on else f"{self.unit_names[unit]} = ?"
-
-    def unit_name(self, unit: int) -> str:
-        """§5: a unit's name, by which informing sets are ranked: the atom, or the variable
-        or counter (``loc(r)``)."""
-        return self.unit_names.get(unit) or self.atoms[_low(unit)]
-
-    def literal(self, t: int, unit: int) -> str:
-        """``unit`` as ``t`` has it: ``a`` / ``not a`` for an atom, else its value (§5)."""
-        if unit in self.unit_names:
-            return self.fact(t, unit)
-        name = self.atoms[_low(unit)]
-        return name if t & unit else f"not {name}"
-
-    def literals(self, t: int, m: int) -> list[str]:
-        """Every unit ``m`` touches as ``t`` has it, by index (divergences, informs)."""
-        return [self.literal(t, u) for u in self.units(m)]
-
-    def world_diff(self, s: int, t: int) -> dict[str, list[str]]:
-        """How world ``s`` differs from the truth ``t``: the atoms (and a variable's or
-        counter's value in ``s``) true in ``s`` only, and those (with ``t``'s values) true in
-        ``t`` only."""
-        if not self.counter_units:
-            return {"true": self.mask_atoms(s & ~t), "false": self.mask_atoms(t & ~s)}
-        plain = ~self.counter_mask()
-        diff = [u for u in self.counter_units if (s ^ t) & u]
-        lo = [_low(u) for u in diff]
-        return {"true": _merge(self, s & ~t & plain, [(i, self.fact(s, u))
-                                                     for i, u in zip(lo, diff, strict=True)]),
-                "false": _merge(self, t & ~s & plain, [(i, self.fact(t, u))
-                                                      for i, u in zip(lo, diff, strict=True)])}
-
-    def counter_mask(self) -> int:
-        """The bits of every counter."""
-        m = 0
-        for u in self.counter_units:
-            m |= u
-        return m
-
-    def state_atoms(self, s: int) -> list[str]:
-        """The true atoms of ``s``, with each variable's value (it is one of its bits) and
-        each counter's value (``balls(b1) = 2``, 0 included)."""
-        if not self.counter_units:
-            return [self.atoms[i] for i in bits(s)]
-        return _merge(self, s & ~self.counter_mask(),
-                      [(_low(u), self.fact(s, u)) for u in self.counter_units])
-
-    def mask_atoms(self, m: int) -> list[str]:
-        return [self.atoms[i] for i in bits(m)]
-
-    def visible_mask(self, t: int) -> int:
-        m = 0
-        for fn, mask in self.visible:
-            if fn(t):
-                m |= mask
-        return m
-
-
-def _low(m: int) -> int:
-    """The index of the lowest set bit of ``m`` (> 0)."""
-    return (m & -m).bit_length() - 1
-
-
-def _merge(g: Grounded, m: int, extra: list[tuple[int, str]]) -> list[str]:
-    """The names of ``m``'s bits and the ``extra`` (index, text) entries, by index."""
-    return [name for _, name in sorted([*((i, g.atoms[i]) for i in bits(m)), *extra])]
-
-
-def bits(m: int) -> Iterable[int]:
-    """The indices of the set bits of ``m``, lowest first (the atoms of a mask, §2)."""
-    i = 0
-    while m:
-        if m & 1:
-            yield i
-        m >>= 1
-        i += 1
 
 
 def ground_problem(problem: Problem, check: Callable[[], None] | None = None,
@@ -275,10 +62,6 @@ def ground_problem(problem: Problem, check: Callable[[], None] | None = None,
     whole model)."""
     problem.check()
     return _Grounder(problem, check, ahead).run()
-
-
-def no_check() -> None:
-    """The ``check`` of grounding and refinement when no limit is watched: does nothing."""
 
 
 class _Grounder:
@@ -300,10 +83,53 @@ class _Grounder:
         self._derived: dict[tuple[str, tuple[str, ...]], Formula] = {}
         self._offer: dict[_Gen, dict[tuple[str, ...], frozenset[str]]] = {}
 
-    # -- atoms --
     def run(self) -> Grounded:
+        """Return the ground problem, built in named steps (GTPyhop-style pseudo-code)::
+
+            ground(problem):
+                fluent = the predicates an effect or a belief world changes; the rest static
+                atoms = every fluent predicate, variable value and counter bit, by name
+                init = the initial state's fluent facts, as bits
+                visible, observable, inferable, hidden = the observability of every atom
+                robot, human, robot-as-seen = the models' tasks the agendas reach, ground
+                goal, co-presence = the ground formulas
+        """
+        names = self._fluents()
+        units = self._atoms(names)
+        self._static_facts()
+        init = 0
+        for n, a in self.p.init:
+            if n not in self.static:
+                init = self.put(init, n, a)
+        visible, (obs, inf, hid) = self._observability(names)
+        self.models: dict[int, GModel] = {}
+        r_ag = self.agenda(self.p.robot_agenda)
+        h_ag = self.agenda(self.p.human_agenda)
+        robot, human, rh, beliefs = self._models(init, r_ag, h_ag)
+        cop_f = self.ground_f(self.d.copresence, {})
+        goal_f = self._goal()
+        return Grounded(
+            problem=self.p, atoms=self.atoms, atom_index=self.atom_index,
+            task_names=self.task_names, task_index=self.task_index, robot=robot, human=human,
+            robot_seen_by_human=rh, init=init, beliefs=beliefs, robot_agenda=r_ag,
+            human_agenda=h_ag, visible=visible, observable_mask=obs, inferable_mask=inf,
+            hidden_mask=hid, copresent_f=cop_f, copresent=self.compile(cop_f), goal_f=goal_f,
+            goal=self.compile(goal_f), fns=self.fns, display=self.display,
+            var_units=tuple(m for k, _, m, _ in units if k == "variable"),
+            counter_units=tuple(m for k, _, m, _ in units if k == "counter"),
+            unit_names={m: head for _, head, m, _ in units},
+            counter_max={m: top for k, _, m, top in units if k == "counter"},
+            multi_mask=sum(m for _, _, m, _ in units),
+            unit_of=self.unit_mask,
+        )
+
+    def _fluents(self) -> list[str]:
+        """Return the predicates, state variables and counters in one namespace sorted by
+        name, after setting which are static (no effect or belief world changes them, §2:
+        folded into the formulas) and which can be made true (``added``)."""
         d, p = self.d, self.p
-        fluent, added = set(), set()
+        fluent: set[str] = set()
+        added: set[str] = set()
         for model in d.models().values():
             for op in model.operators.values():
                 fluent |= _effect_preds(op.effects)
@@ -311,15 +137,23 @@ class _Grounder:
         for w in p.beliefs:
             fluent |= {a[0] for a in w.true | w.false}
             added |= {a[0] for a in w.true}
-        # predicates, state variables and counters share one namespace, sorted by name
         names = sorted({*d.predicates, *d.variables, *d.counters})
         self.static = {n for n in names if n not in fluent}
+        # a predicate nothing makes true (actions only delete it, no world adds it): its
+        # atoms false at the start are false in every state and world (§2), so read FALSE
+        self.shrinking = {n for n in d.predicates if n in fluent and n not in added}
+        return names
+
+    def _atoms(self, names: list[str]) -> list[tuple[str, str, int, int]]:
+        """Lay out the atoms (§2): one per ground fluent predicate; a state variable one bit
+        per value (one-hot), a counter one bit per power of two. Return the variables' and
+        counters' units as (kind, name, mask, max)."""
+        d = self.d
         atoms: list[str] = []
-        # a variable is one bit per value (one-hot), a counter one bit per power of two
         self.value_index: dict[str, int] = {}  # value view "loc(r, mt)" -> its bit
         self.counter_at: dict[str, int] = {}  # "balls(b1)" -> the counter's mask
         self.unit_mask: dict[int, int] = {}  # bit index -> its variable's or counter's mask
-        units: list[tuple[str, str, int, int]] = []  # (kind, name, mask, max)
+        units: list[tuple[str, str, int, int]] = []
         for name in names:
             if name in self.static:
                 continue
@@ -350,21 +184,26 @@ class _Grounder:
         self.atoms = atoms
         self.atom_index = {a: i for i, a in enumerate(atoms)}
         self.atom_index.update(self.value_index)  # loc(r, mt) reads as loc(r) = mt
+        return units
+
+    def _static_facts(self) -> None:
+        """The initial facts static and shrinking atoms are read from (§2), and the
+        predicates a method's binding may be drawn from (true only where the initial state
+        says, :meth:`_ModelGrounding.bindings`)."""
+        d, p = self.d, self.p
         self.init_static = {call_str(n, a) for n, a in p.init if n in self.static}
-        # a predicate nothing makes true (actions only delete it, no world adds it): its
-        # atoms false at the start are false in every state and world (§2), so read FALSE
-        self.shrinking = {n for n in d.predicates if n in fluent and n not in added}
         self.init_shrinking = {call_str(n, a) for n, a in p.init if n in self.shrinking}
-        # predicates true only where the initial state says (what a binding may be drawn from)
         self.factual = {n for n in d.predicates if n in self.static or n in self.shrinking}
         self.init_counter = {call_str(n, a[:-1]): int(a[-1]) for n, a in p.init
                              if n in self.static and n in d.counters}
-        init = 0
-        for n, a in p.init:
-            if n not in self.static:
-                init = self.put(init, n, a)
 
-        # observability: group ground atoms by their ground visibility formula
+    def _observability(self, names: list[str]
+                       ) -> tuple[list[tuple[StateFn, int]], tuple[int, int, int]]:
+        """Return §2's observability: the visibility groups (a compiled ground condition and
+        the atoms it shows; atoms grouped by their ground condition), and the masks of the
+        observable, inferable and hidden atoms. A variable is read value by value (the
+        condition may name the value), a counter whole."""
+        d = self.d
         groups: dict[Formula, int] = {}
         obs = inf = hid = 0
         for name in names:
@@ -383,27 +222,30 @@ class _Grounder:
                              for val in self.objects[sv.values]]
                 else:  # a counter is seen whole
                     cases = [(b, self.counter_at[call_str(name, args)])]
-                for binding, bits in cases:
+                for binding, mask in cases:
                     if kind == "observable":
-                        obs |= bits
-                        f = self.ground_f(decl.observability.when, binding)
-                        if f != FALSE:
-                            groups[f] = groups.get(f, 0) | bits
+                        obs |= mask
+                        gf = self.ground_f(decl.observability.when, binding)
+                        if gf != FALSE:
+                            groups[gf] = groups.get(gf, 0) | mask
                     elif kind == "inferable":
-                        inf |= bits
+                        inf |= mask
                     else:
-                        hid |= bits
-        visible = [(self.compile(f), m) for f, m in groups.items()]
+                        hid |= mask
+        return [(self.compile(gf), mask) for gf, mask in groups.items()], (obs, inf, hid)
 
-        # tasks and models
-        self.models: dict[int, GModel] = {}
-        r_ag = self.agenda(p.robot_agenda)
-        h_ag = self.agenda(p.human_agenda)
+    def _models(self, init: int, r_ag: tuple[int, ...], h_ag: tuple[int, ...]
+                ) -> tuple[GModel, GModel, GModel, list[tuple[int, tuple[int, ...]]]]:
+        """Return the ground robot, human and robot-as-the-human-sees-it models (§1, the
+        tasks the agendas reach) and the belief worlds as (state, the robot agenda the human
+        attributes there). The robot's model reaches the belief worlds' agendas too when the
+        human's view of it is the robot's own."""
+        d = self.d
         robot = self.ground_model(d.robot, [r_ag])
         human = self.ground_model(d.human, [h_ag])
         beliefs = []
         belief_agendas = [r_ag]
-        for w in p.beliefs:
+        for w in self.p.beliefs:
             s = init
             for n, a in sorted(w.true):
                 s = self.put(s, n, a)
@@ -415,27 +257,16 @@ class _Grounder:
               else self.ground_model(d.robot_seen_by_human, belief_agendas, estimate=True))
         if rh is robot and any(ag != r_ag for ag in belief_agendas):
             robot = rh = self.ground_model(d.robot, belief_agendas)
+        return robot, human, rh, beliefs
 
-        cop_f = self.ground_f(d.copresence, {})
-        goal_parts = [self.ground_f(d.goal, {})] if d.goal is not None else []
-        for positive, (n, a) in p.goal:
-            g = self.ground_f(Atom(n, a), {})
-            goal_parts.append(g if positive else Not(g))
-        goal_f = simplify_and(goal_parts)
-        return Grounded(
-            problem=p, atoms=atoms, atom_index=self.atom_index, task_names=self.task_names,
-            task_index=self.task_index, robot=robot, human=human, robot_seen_by_human=rh,
-            init=init, beliefs=beliefs, robot_agenda=r_ag, human_agenda=h_ag, visible=visible,
-            observable_mask=obs, inferable_mask=inf, hidden_mask=hid, copresent_f=cop_f,
-            copresent=self.compile(cop_f), goal_f=goal_f, goal=self.compile(goal_f), fns=self.fns,
-            display=self.display,
-            var_units=tuple(m for k, _, m, _ in units if k == "variable"),
-            counter_units=tuple(m for k, _, m, _ in units if k == "counter"),
-            unit_names={m: head for _, head, m, _ in units},
-            counter_max={m: top for k, _, m, top in units if k == "counter"},
-            multi_mask=sum(m for _, _, m, _ in units),
-            unit_of=self.unit_mask,
-        )
+    def _goal(self) -> Formula:
+        """Return the ground goal: the domain's goal formula and the problem's goal
+        literals, conjoined (§6)."""
+        parts = [self.ground_f(self.d.goal, {})] if self.d.goal is not None else []
+        for positive, (n, a) in self.p.goal:
+            gf = self.ground_f(Atom(n, a), {})
+            parts.append(gf if positive else Not(gf))
+        return simplify_and(parts)
 
     def put(self, s: int, name: str, args: tuple[str, ...]) -> int:
         """``s`` with the fact ``name(args)`` made true: an atom set; a variable given the
@@ -517,8 +348,8 @@ class _Grounder:
         if unit is None:
             raise DomainError(f"{key}: an argument has the wrong type")
         lo = _low(unit)
-        bits = [GAtom(lo + j, self.atoms[lo + j]) for j in range(c.max.bit_length())]
-        body = value_in(bits, {v for v in range(c.max + 1) if test.holds(v)}, c.max)
+        digits = [GAtom(lo + j, self.atoms[lo + j]) for j in range(c.max.bit_length())]
+        body = value_in(digits, {v for v in range(c.max + 1) if test.holds(v)}, c.max)
         return body if body in (TRUE, FALSE) else GTest(body, str(test))
 
     def offers(self, gen: _Gen) -> dict[tuple[str, ...], frozenset[str]]:
@@ -638,16 +469,16 @@ class _Grounder:
                     conds.extend(c2)
             elif isinstance(e, Assign):
                 unit, sets = self.assignment(e, b)
-                for c_f, bits in sets:
+                for c_f, new_bits in sets:
                     c = simplify_and([cond, c_f])
                     if c == TRUE:
                         if (add | dele) & unit:  # one value at a time
                             raise DomainError(f"effect {e}: the action already changes "
                                               f"{Atom(e.name, e.args)}; give it one value")
-                        add |= bits
-                        dele |= unit & ~bits
+                        add |= new_bits
+                        dele |= unit & ~new_bits
                     elif c != FALSE:
-                        conds.append((self.compile(c), bits, unit & ~bits))
+                        conds.append((self.compile(c), new_bits, unit & ~new_bits))
             else:
                 raise DomainError(f"not an effect: {e!r}")
         return add, dele & ~add, conds
@@ -672,12 +503,12 @@ class _Grounder:
         lo = _low(unit)
         if e.value is not None:
             return unit, [(TRUE, int(e.value) << lo)]  # type: ignore[arg-type]
-        bits = [GAtom(lo + j, self.atoms[lo + j]) for j in range(c.max.bit_length())]
+        digits = [GAtom(lo + j, self.atoms[lo + j]) for j in range(c.max.bit_length())]
         cases = []
         for v in range(c.max + 1):
             new = min(c.max, max(0, v + e.delta))
             if new != v:
-                cases.append((value_in(bits, {v}, c.max), new << lo))
+                cases.append((value_in(digits, {v}, c.max), new << lo))
         return unit, cases
 
 
@@ -888,10 +719,10 @@ def _binding_plan(m: Method, bound: set[Var], factual: set[str]
     return checks, gens
 
 
-def value_in(bits: Sequence[Formula], allowed: set[int], top: int) -> Formula:
-    """A formula over a counter's ``bits`` (lowest first) that holds when its value is in
-    ``allowed``; values above ``top`` never occur, so they may go either way (Shannon
-    expansion from the highest bit, whole halves decided at once)."""
+def value_in(digits: Sequence[Formula], allowed: set[int], top: int) -> Formula:
+    """Return a formula over a counter's ``digits`` (its atoms, lowest bit first) that holds
+    when its value is in ``allowed``; values above ``top`` never occur, so they may go either
+    way (Shannon expansion from the highest bit, whole halves decided at once)."""
     def go(j: int, base: int) -> Formula | None:  # values base .. base + 2**(j+1) - 1
         vals = [v for v in range(base, base + (2 << j if j >= 0 else 1)) if v <= top]
         if not vals:
@@ -905,10 +736,10 @@ def value_in(bits: Sequence[Formula], allowed: set[int], top: int) -> Formula:
         if high is None or high == low:
             return low
         assert low is not None
-        b = bits[j]
+        b = digits[j]
         return simplify_or([simplify_and([b, high]), simplify_and([negate(b), low])])
 
-    out = go(len(bits) - 1, 0)
+    out = go(len(digits) - 1, 0)
     return FALSE if out is None else out
 
 
@@ -940,4 +771,4 @@ def _split(name: str) -> tuple[str, tuple[str, ...]]:
     return head, args
 
 
-__all__ = ["FINISH", "GMethod", "GModel", "GOp", "Grounded", "ground_problem"]
+__all__ = ["FINISH", "GMethod", "GModel", "GOp", "Grounded", "bits", "ground_problem", "no_check"]

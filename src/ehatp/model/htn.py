@@ -21,7 +21,7 @@ from math import factorial
 
 from .domain import DomainError
 from .formula import Formula, StateFn, negate
-from .grounding import FINISH, GModel, bits, no_check
+from .grounded import FINISH, GModel, bits, no_check
 
 MAX_DECOMPOSITION = 64
 """Default of ``[limits] max_decomposition``: nested method applications allowed before the

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 from ..epistemic.semantics import DEAD_PASSIVE_RUN, Semantics
 from ..epistemic.state import EState
 from ..errors import InputError
-from ..model.grounding import Grounded
+from ..model.grounded import Grounded
 from ..model.options import ObjectiveKind
 from ..model.problem import Cost
 from . import heuristic as _heuristic

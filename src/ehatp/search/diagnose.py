@@ -14,7 +14,7 @@ from collections.abc import Callable, Sequence
 
 from ..epistemic.semantics import DEAD_PASSIVE_RUN
 from ..model.formula import FALSE, TRUE, And, Formula, GAtom, Not
-from ..model.grounding import FINISH, Grounded
+from ..model.grounded import FINISH, Grounded
 from ..model.problem import call_str
 from .graph import DEAD, OPEN, Graph
 

@@ -70,7 +70,7 @@ from fractions import Fraction
 
 from ..epistemic.state import ROBOT, EState
 from ..model.domain import AgentModel, Operator
-from ..model.grounding import Grounded
+from ..model.grounded import Grounded
 from ..model.htn import Agenda, Block
 from ..model.problem import Cost
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from ..model.grounding import Grounded, ground_problem
+from ..model.grounded import Grounded
+from ..model.grounding import ground_problem
 from ..model.options import Intentions
 from ..model.problem import Problem
 from ..policy_format import Policy

@@ -42,7 +42,7 @@ from typing import Any
 from ..epistemic.semantics import Semantics
 from ..epistemic.state import EState, Worlds, normalize, states_of
 from ..model.formula import And, Formula, GAtom, GTest, Not, Or
-from ..model.grounding import GModel, Grounded
+from ..model.grounded import GModel, Grounded
 from ..model.htn import Agenda
 from ..model.problem import Limits
 
