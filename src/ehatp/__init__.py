@@ -5,19 +5,33 @@
 >>> result = ehatp.solve(problem)                       # doctest: +SKIP
 >>> result.policy.cost, result.stats["distinct"]        # doctest: +SKIP
 >>> ehatp.validate(problem, result.policy)              # doctest: +SKIP
+>>> ehatp.explore(result.policy)                        # doctest: +SKIP
+
+The layers, from the bottom: ``model`` (the DSL, problems, grounding, HTN: data), ``epistemic``
+(the semantics), ``search`` (the planner) and ``check`` (the validator), then ``formats`` (files
+in and out), ``run`` (executing a policy), ``experiments`` and ``cli`` (docs/architecture.md).
 """
 
-from typing import TYPE_CHECKING
+import sys
+from typing import TYPE_CHECKING, Any
 
 from .check.validator import Report
 from .check.validator import validate as _validate
-from .errors import EhatpError, InputError
+from .errors import (
+    DomainError,
+    EhatpError,
+    ExecutionError,
+    InputError,
+    PolicyMismatch,
+    UncoveredHumanAction,
+)
+from .formats.policy import Policy
+from .formats.problem_toml import load
 from .model.domain import (
     HIDDEN,
     INFERABLE,
     AgentModel,
     Domain,
-    DomainError,
     assign,
     domain_factory,
     for_each,
@@ -35,12 +49,12 @@ from .model.options import (
     Relevance,
     Speech,
 )
-from .model.problem import BeliefWorld, Costs, Limits, Problem, load
-from .policy_format import Policy
+from .model.problem import BeliefWorld, Costs, Limits, Problem
 
 if TYPE_CHECKING:
+    from .formats.render import Explorer
+    from .run.executor import Executor
     from .search.planner import Result, solve
-    from .tools.executor import ExecutionError, Executor, PolicyMismatch, UncoveredHumanAction
 
 __version__ = "0.2.0"
 
@@ -50,9 +64,39 @@ def validate(problem: Problem, policy: Policy) -> Report:
     return _validate(problem, policy)
 
 
-_LAZY = {"solve": "search.planner", "Result": "search.planner", "Executor": "tools.executor",
-         "UncoveredHumanAction": "tools.executor", "ExecutionError": "tools.executor",
-         "PolicyMismatch": "tools.executor"}
+def explore(policy: Policy) -> "Explorer":
+    """``policy`` as the offline explorer (``ehatp render --format html``), for a notebook to
+    show: the last value of a cell, or ``display(ehatp.explore(policy))``. Inside IPython a
+    Policy shows itself so already (docs/notebook.md)."""
+    from .formats.render import Explorer
+
+    return Explorer(policy)
+
+
+def _policy_html(policy: Policy) -> str:
+    from .formats.render import notebook_html
+
+    return notebook_html(policy)
+
+
+def _show_policies_in_notebooks() -> None:
+    """Inside IPython (a Jupyter kernel), display every Policy as the explorer: an HTML
+    formatter for the type, registered by name so that nothing is imported until a policy is
+    shown. Outside IPython, nothing (IPython is never imported here)."""
+    ipython: Any = sys.modules.get("IPython")
+    shell = ipython.get_ipython() if ipython is not None else None
+    if shell is None:
+        return
+    try:
+        html = shell.display_formatter.formatters["text/html"]
+        html.for_type_by_name("ehatp.formats.policy", "Policy", _policy_html)
+    except (AttributeError, KeyError):  # an IPython without HTML display: keep its repr
+        pass
+
+
+_show_policies_in_notebooks()
+
+_LAZY = {"solve": "search.planner", "Result": "search.planner", "Executor": "run.executor"}
 
 
 def __getattr__(name: str) -> object:
@@ -72,6 +116,6 @@ __all__ = [
     "FALSE", "HIDDEN", "INFERABLE", "TRUE", "AgentModel", "BeliefWorld", "Costs", "Domain",
     "DomainError", "EhatpError", "ExecutionError", "Executor", "InputError", "Limits",
     "Policy", "PolicyMismatch", "Problem", "Result", "UncoveredHumanAction", "Var", "eq", "exists",
-    "domain_factory", "for_each", "forall", "load", "observable", "solve", "validate", "when",
-    "assign",
+    "domain_factory", "explore", "for_each", "forall", "load", "observable", "solve", "validate",
+    "when", "assign",
 ]

@@ -10,7 +10,9 @@ to its branches. See ``docs/policy-format.md`` (version 2; version 1 files, whic
 tree unfolding, are still read and turned into this graph).
 
 This module imports neither the planner nor the validator: both use it, and so can any tool that
-only reads policy files.
+only reads policy files. Nor does it import the renderer: a policy shows itself in a notebook
+through :mod:`ehatp.formats.render` (``ehatp.explore(policy)``, or inline once ``ehatp`` is
+imported in IPython; docs/notebook.md).
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
-from .errors import InputError
+from ..errors import InputError
 
 Cost = int | Fraction
 
@@ -291,19 +293,6 @@ class Policy:
             else:
                 parts.append(f" {json.dumps(key)}: {_dumps(d[key])}")
         return "{\n" + ",\n".join(parts) + "\n}\n"
-
-    def _repr_html_(self) -> str:
-        """The offline explorer (``ehatp render --format html``) inline in a Jupyter notebook:
-        the page in a sandboxed ``<iframe srcdoc>``, so that its styles and scripts stay out of
-        the notebook's. See ``docs/notebook.md``."""
-        from html import escape
-
-        from .tools.render import to_html  # lazily: this module stays free of the tools
-
-        page = escape(to_html(self), quote=True)
-        return (f'<iframe srcdoc="{page}" sandbox="allow-scripts" title="ehatp policy '
-                f'{escape(self.problem, quote=True)}" style="width: 100%; height: 640px; '
-                'border: 1px solid #ccc;"></iframe>')
 
     def write(self, path: str | Path, check: Callable[[], None] | None = None) -> None:
         """Write :meth:`to_json` to ``path``; ``check`` as in :meth:`to_dict` (the file is not

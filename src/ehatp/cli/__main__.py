@@ -1,0 +1,5 @@
+"""``python -m ehatp.cli ...``: the ``ehatp`` command."""
+
+from .app import main
+
+main()

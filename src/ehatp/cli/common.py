@@ -1,0 +1,192 @@
+"""What every command shares: how each run ends in one line and a documented exit code, how a
+command module makes its typer app (:func:`command_app`), and reading the files commands take.
+
+Exit codes: 0 ok, 1 no (valid) policy, 2 bad input (one line ``error: FILE:PLACE: problem;
+fix``), 3 internal error (one line naming a file that holds the traceback, or the traceback on
+screen with ``ehatp --debug``). Usage mistakes (an unknown option, a missing argument) are bad
+input too, and also one line.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import platform
+import sys
+import tempfile
+import traceback
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, NoReturn
+
+import typer
+from typer.core import TyperGroup
+from typer.exceptions import TyperException
+
+from .. import __version__
+from ..errors import DomainError, EhatpError, InputError
+from ..formats.policy import Policy
+from ..formats.policy_check import check_policy_problem, read_policy
+from ..formats.problem_toml import load
+from ..model.options import ObjectiveKind
+from ..model.problem import Problem
+
+if TYPE_CHECKING:
+    from rich.console import Console
+
+EXIT_OK, EXIT_NO_POLICY, EXIT_BAD_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
+ARGV_KEY = "ehatp.argv"  # where the command line is kept for an internal-error report
+
+
+def die(message: str, code: int = EXIT_BAD_INPUT) -> NoReturn:
+    """One line on stderr, then exit; newlines are folded so the promise of one line holds."""
+    typer.echo(f"error: {' '.join(message.split())}", err=True)
+    raise typer.Exit(code)
+
+
+@contextmanager
+def user_errors(file: Path | str) -> Iterator[None]:
+    """Turn the errors a user can cause with ``file`` into one line and exit code 2."""
+    try:
+        yield
+    except InputError as e:
+        die(e.line())
+    except DomainError as e:
+        die(f"{file}: the domain is malformed: {e}; fix the domain definition")
+    except EhatpError as e:
+        die(f"{file}: {e}")
+
+
+# --- the files commands read -----------------------------------------------------------------
+
+
+def load_problem(path: Path) -> Problem:
+    with user_errors(path):
+        return load(path)
+    raise AssertionError  # unreachable: user_errors exits; keeps type checkers content
+
+
+def load_policy(path: Path, problem: Path | None = None, *, counts: bool = True) -> Policy:
+    """The policy at ``path``, its structure checked (see
+    :func:`~ehatp.formats.policy_check.read_policy`), and with ``problem`` checked to be the
+    one it was planned for; a mistake is one line, exit 2."""
+    with user_errors(path):
+        pol = read_policy(path, counts=counts)
+    if problem is not None:
+        prob = load_problem(problem)
+        with user_errors(path):
+            check_policy_problem(pol, path, prob)
+    return pol
+
+
+def with_objective(prob: Problem, kind: ObjectiveKind | None) -> Problem:
+    """Print the problem's notes; ``--objective`` overrides its ``[objective] kind``."""
+    if prob.notes:
+        from ..formats.text import print_notes
+
+        print_notes(prob)
+    if kind is None:
+        return prob
+    return dataclasses.replace(prob, objective=dataclasses.replace(prob.objective, kind=kind))
+
+
+def stderr_console() -> Console | None:
+    """A console for live progress, or None when stderr is not a terminal (stay quiet)."""
+    if not sys.stderr.isatty():
+        return None
+    from rich.console import Console
+
+    return Console(stderr=True)
+
+
+# --- one command, one module -----------------------------------------------------------------
+
+
+def command_app(**settings: Any) -> typer.Typer:
+    """The typer app of one command module (``ehatp/cli/<command>.py``), with the settings of
+    ``ehatp`` itself: help in markdown, no shell-completion options. A module registers its
+    command with ``@app.command("name")``; a group of commands (``bench``, ``export``) gives
+    its ``name`` and ``help`` here. :data:`ehatp.cli.app.COMMANDS` lists the modules."""
+    return typer.Typer(add_completion=False, pretty_exceptions_show_locals=False,
+                       rich_markup_mode="markdown", **settings)
+
+
+# --- the command group: usage mistakes and internal errors as one line -----------------------
+
+
+class Commands(TyperGroup):
+    """The ``ehatp`` command group. A usage mistake becomes one ``error:`` line (exit 2); an
+    exception that is the program's fault one ``internal error:`` line (exit 3), its
+    traceback in a file (or on screen with ``--debug``)."""
+
+    # contexts are typed Any: typer's own Context type lives in a private module
+    def make_context(self, info_name: str | None, args: list[str], parent: Any = None,
+                     **extra: Any) -> Any:
+        argv = list(args)  # parsing consumes the list
+        with _usage_errors():
+            ctx = super().make_context(info_name, args, parent, **extra)
+        ctx.meta[ARGV_KEY] = argv
+        return ctx
+
+    def invoke(self, ctx: Any) -> Any:
+        try:
+            with _usage_errors():
+                return super().invoke(ctx)
+        except (typer.Exit, typer.Abort, TyperException, EOFError):
+            raise  # the normal ways out (EOFError: typer's "Aborted!")
+        except BrokenPipeError:
+            raise  # the reader went away (e.g. `| head`): typer exits quietly
+        except Exception as e:
+            internal_error(e, ctx.meta.get(ARGV_KEY, []), bool(ctx.params.get("debug")))
+
+
+@contextmanager
+def _usage_errors() -> Iterator[None]:
+    try:
+        yield
+    except TyperException as e:
+        if type(e).__name__ == "NoArgsIsHelpError":  # `ehatp` alone: the help was printed
+            raise
+        ctx = getattr(e, "ctx", None)
+        see = f"; see '{ctx.command_path} --help'" if ctx is not None else ""
+        message = e.format_message().rstrip(".")
+        die(f"{message}{see}", getattr(e, "exit_code", EXIT_BAD_INPUT))
+
+
+def internal_error(e: BaseException, argv: Sequence[str], debug: bool) -> NoReturn:
+    """Report an exception that is the program's fault: one line, exit code 3. The traceback
+    goes to a file named after its content (the same failure reuses one file), or to the
+    screen with ``--debug``."""
+    what = f"{type(e).__name__}: {e}" if str(e) else type(e).__name__
+    what = " ".join(what.split())
+    tb = "".join(traceback.format_exception(e))
+    if debug:
+        typer.echo(tb.rstrip("\n"), err=True)
+        typer.echo(f"internal error: {what}; traceback above", err=True)
+        raise typer.Exit(EXIT_INTERNAL)
+    report = (f"ehatp {__version__} internal error (Python {platform.python_version()}, "
+              f"{sys.platform})\ncommand: ehatp {' '.join(argv)}\n\n{tb}")
+    digest = hashlib.sha256(tb.encode()).hexdigest()[:12]
+    path = Path(tempfile.gettempdir()) / f"ehatp-internal-error-{digest}.txt"
+    try:
+        path.write_text(report, encoding="utf-8")
+        where = f"details in {path}"
+    except OSError:
+        where = "run again with `ehatp --debug ...` to see the traceback"
+    typer.echo(f"internal error: {what}; this is a bug in ehatp, not in your input; {where} "
+               "(please report it)", err=True)
+    raise typer.Exit(EXIT_INTERNAL)
+
+
+def write_output(text: str, out: Path | None) -> None:
+    """Write a command's output to ``out``, or to stdout when it is None; a file that cannot
+    be written is one line and exit 2."""
+    if out is None:
+        sys.stdout.write(text)
+        return
+    try:
+        out.write_text(text, encoding="utf-8")
+    except OSError as e:
+        die(InputError(str(out), "", f"cannot write ({e.strerror or e})",
+                       "check that the directory exists and is writable").line())

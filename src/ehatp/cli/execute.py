@@ -1,0 +1,66 @@
+"""``ehatp execute``: a policy run live, JSON lines on stdin and stdout, for a robot process
+that runs ehatp as its subprocess (the protocol is :mod:`ehatp.run.execute`; docs/execution.md).
+
+Exit codes: 0 the goal is reached; 1 the input ended before the goal, or replanning found no
+policy; 2 bad input before the protocol starts (one ``error:`` line on stderr) or a policy that
+turns out not to fit the problem (a ``policy-mismatch`` line); 3 internal error.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import typer
+
+from ..errors import ExecutionError, InputError, PolicyMismatch
+from ..formats.policy_check import read_policy
+from ..run.execute import EXIT_STOPPED, json_lines, run
+from ..run.executor import Executor
+from .common import command_app, die, load_problem, user_errors
+
+app = command_app()
+
+
+@app.command("execute")
+def execute_cmd(
+    problem: Path = typer.Argument(..., help="Problem TOML file.", show_default=False),
+    policy: Path | None = typer.Option(
+        None, "--policy", "-p", help="Policy JSON from `ehatp solve` (default: solve now).",
+        show_default=False),
+    replan: bool = typer.Option(
+        False, "--replan", help="When the human does something the policy does not cover "
+                                "but the human model allows, plan again from there."),
+    save_replans: Path | None = typer.Option(
+        None, "--save-replans", metavar="DIR", help="Write each replanned policy to "
+        "DIR/replan-N.json (its `after` is the execution so far).", show_default=False),
+) -> None:
+    """Execute a policy live: JSON lines on stdin (what the human did, what the robot
+    finished) and on stdout (what the robot should do, what the human believes, the goal,
+    errors), for a robot process to run as a subprocess. See docs/execution.md.
+
+    Exit code 0: goal reached; 1: the input ended first, or no policy after replanning;
+    2: bad problem or policy."""
+    prob = load_problem(problem)
+    pol = None
+    if policy is not None:
+        with user_errors(policy):
+            pol = read_policy(policy)
+    where = str(policy) if policy is not None else str(problem)
+    with user_errors(where):
+        try:
+            ex = Executor(prob, pol)
+        except PolicyMismatch as e:
+            raise InputError(where, "", str(e), "give the policy solved for this problem"
+                             ) from None
+        except ExecutionError as e:
+            typer.echo(json.dumps({"error": "no-policy", "message": str(e), "line": 0}))
+            raise typer.Exit(EXIT_STOPPED) from None
+    if save_replans is not None and not save_replans.is_dir():
+        die(InputError(str(save_replans), "", "not a folder",
+                       "create it, or give an existing folder to --save-replans").line())
+    code = run(ex, sys.stdin, json_lines(sys.stdout), replan=replan,
+               source=str(policy) if policy is not None else "solved now",
+               save=save_replans)
+    raise typer.Exit(code)

@@ -1,0 +1,50 @@
+"""``ehatp export``: a policy in another tool's format; ``export bt`` writes a behaviour tree
+(:mod:`ehatp.formats.bt`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from ..errors import InputError
+from ..formats.bt import BTFormat, answers_of, from_policy, to_btcpp, to_py_trees_source
+from ..formats.policy_check import check_policy_problem, read_policy
+from .common import command_app, load_problem, user_errors, write_output
+
+app = command_app(name="export", help="Write a policy in another tool's format.",
+                  no_args_is_help=True)
+
+
+@app.command("bt")
+def export_bt(
+    policy: Path = typer.Argument(..., help="Policy JSON written by `ehatp solve --out FILE`.",
+                                  show_default=False),
+    fmt: BTFormat = typer.Option(BTFormat.btcpp4, "--format", "-f",
+                                 help="btcpp4 (BehaviorTree.CPP v4 XML, opens in Groot) or "
+                                      "py_trees (a Python module building the tree)."),
+    out: Path | None = typer.Option(None, "--out", "-o", help="Write here instead of stdout."),
+    problem: Path | None = typer.Option(
+        None, "--problem", "-p", metavar="PROBLEM.toml",
+        help="The problem the policy was planned for: checked, and used to write the robot's "
+             "answers (yes/no) to the human's questions.", show_default=False),
+) -> None:
+    """Write a policy as a behaviour tree: robot moves are action nodes, each human choice a
+    wait for the human's action then a Fallback over what the human did, shared states
+    SubTrees defined once, goals GoalReached. See docs/behaviour-trees.md."""
+    with user_errors(policy):
+        pol = read_policy(policy)
+    answers = None
+    if problem is not None:
+        prob = load_problem(problem)
+        with user_errors(policy):
+            check_policy_problem(pol, policy, prob)
+            answers = answers_of(prob, pol)
+    with user_errors(policy):
+        try:
+            forest = from_policy(pol, answers)
+        except ValueError as e:
+            raise InputError(str(policy), "", str(e), "give a policy written by ehatp solve"
+                             ) from None
+    text = to_btcpp(forest) if fmt is BTFormat.btcpp4 else to_py_trees_source(forest)
+    write_output(text, out)

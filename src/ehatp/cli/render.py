@@ -1,0 +1,53 @@
+"""``ehatp render``: a policy as Graphviz DOT or SVG, or as the HTML explorer
+(:mod:`ehatp.formats.render` draws it)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from ..errors import DotMissing
+from ..formats.policy_check import check_policy_problem, read_policy
+from ..formats.render import DEFAULT_MAX_NODES, Format, render
+from .common import command_app, die, load_problem, user_errors, write_output
+
+app = command_app()
+
+
+@app.command("render")
+def render_command(
+    policy: Path = typer.Argument(..., help="Policy JSON written by `ehatp solve --out FILE`.",
+                                  show_default=False),
+    fmt: Format = typer.Option(Format.dot, "--format", "-f",
+                               help="dot (text), svg (needs Graphviz) or html (explorer)."),
+    out: Path | None = typer.Option(None, "--out", "-o", help="Write here instead of stdout."),
+    max_depth: int | None = typer.Option(None, "--max-depth", min=0,
+                                         help="Fold everything below this depth."),
+    max_nodes: int = typer.Option(DEFAULT_MAX_NODES, "--max-nodes", min=1,
+                                  help="Node budget; bigger policies are collapsed."),
+    share: bool | None = typer.Option(None, "--share/--no-share",
+                                      help="Draw identical subtrees once "
+                                           "[default: only when over --max-nodes]."),
+    problem: Path | None = typer.Option(None, "--problem", "-p", metavar="PROBLEM.toml",
+                                        help="Check that the policy was planned for this "
+                                             "problem file."),
+) -> None:
+    """Draw a policy as Graphviz DOT or SVG, or as a self-contained HTML explorer.
+
+    The file's structure is checked first (exit 2 if it was edited into something else)."""
+    with user_errors(policy):
+        pol = read_policy(policy)
+    if problem is not None:
+        prob = load_problem(problem)
+        with user_errors(policy):
+            check_policy_problem(pol, policy, prob)
+    with user_errors(policy):
+        try:
+            text, notes = render(pol, fmt, max_depth=max_depth, max_nodes=max_nodes,
+                                 share=share)
+        except DotMissing as e:
+            die(str(e))
+    if notes:
+        typer.echo(f"render: {policy}: collapsed: {'; '.join(notes)}", err=True)
+    write_output(text, out)

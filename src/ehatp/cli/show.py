@@ -1,0 +1,53 @@
+"""``ehatp show``: a policy as an indented tree and its branches' timelines
+(:mod:`ehatp.formats.text` writes them)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from .common import command_app, load_policy
+
+app = command_app()
+
+
+@app.command("show")
+def show_cmd(
+    policy: Annotated[Path, typer.Argument(
+        help="Policy JSON written by `ehatp solve`.", metavar="POLICY.json",
+        show_default=False)],
+    tree: Annotated[bool, typer.Option(
+        "--tree/--no-tree", help="Print the policy tree.")] = True,
+    timelines: Annotated[bool, typer.Option(
+        "--timelines/--no-timelines",
+        help="Print the branches' timelines (the first 100).")] = True,
+    details: Annotated[bool, typer.Option(
+        "--details", "-d", help="Under each tree node, list what the human is unsure about "
+                                "and the K-counter.")] = False,
+    problem: Annotated[Path | None, typer.Option(
+        "--problem", "-p", help="Check that the policy was planned for this problem file.",
+        metavar="PROBLEM.toml", show_default=False)] = None,
+) -> None:
+    """Print a policy as an indented tree and the timelines of its branches (the first 100).
+
+    Tree: each line is one step (node number, agent, action, W = worlds the human entertains;
+    marks apart, COMM for a communication, GOAL). Straight runs stay at one indent; the tree
+    forks only where the human chooses. A node reached by several paths is printed once; the
+    other moves into it end with "-> see node N".
+    Timelines: turns while the agents are together,
+    parallel lanes while they are apart. Colour on a terminal, plain text in a pipe.
+    The file's structure is checked first (exit 2 if it was edited into something else).
+    """
+    pol = load_policy(policy, problem)
+    from ..formats.text import plain, policy_lines, print_rich
+
+    lines = policy_lines(pol, tree=tree, timelines=timelines, details=details)
+    if sys.stdout.isatty():
+        from rich.console import Console
+
+        print_rich(lines, Console())
+    else:
+        typer.echo(plain(lines), nl=False)

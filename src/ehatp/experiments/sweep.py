@@ -1,0 +1,714 @@
+"""Solve many problem files, and a grid of variants of each, in parallel (``ehatp sweep``,
+:mod:`ehatp.cli.sweep`).
+
+One JSON line per instance, written as results arrive; ``--resume`` skips the instances whose
+key (sha256 of the problem text, the overrides, a domain file beside the problem and the ehatp
+version) already has a row. Instances run on a local process pool, a Dask cluster or a Ray
+cluster; each is isolated (``--memory``, ``--timeout`` and a watchdog), so a runaway one
+becomes an error row while the rest complete. ``--plot`` draws a results file. See
+``docs/sweep.md``; the workers' side is :mod:`ehatp.experiments.sweep_worker`.
+
+Why not joblib: ``Parallel`` ends the whole run when one worker process dies, and cannot say
+which task it was running. Every backend here hands out one ``concurrent.futures.Future`` per
+task instead (a ``ProcessPoolExecutor``, Dask's ``Client.get_executor()``, Ray's
+``ObjectRef.future()``), so a lost worker costs its own row only.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import csv
+import glob
+import hashlib
+import importlib
+import itertools
+import json
+import logging
+import multiprocessing
+import os
+import socket
+import tomllib
+from collections import deque
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
+from datetime import date, datetime
+from datetime import time as dtime
+from enum import StrEnum
+from pathlib import Path
+from typing import Any, Protocol
+
+from rich.table import Table
+
+from .. import __version__
+from ..errors import InputError
+from ..formats.problem_toml import loads
+from .sweep_worker import ROW_KEYS, Task, error_row, run_instance
+
+Grid = dict[str, list[Any]]
+Row = dict[str, Any]
+
+# the first part of a grid key: a problem file's tables (and its top-level goal)
+GRID_TABLES = ("problem", "domain", "objects", "init", "beliefs", "agenda", "costs", "limits",
+               "human", "communication", "objective", "options", "goal")
+PLOT_EXTRA = "pip install 'ehatp[plot]'"
+
+
+class ExecutorKind(StrEnum):
+    local = "local"
+    dask = "dask"
+    ray = "ray"
+
+
+# --- the grid --------------------------------------------------------------------------------
+
+
+def read_grid(path: Path) -> Grid:
+    """The grid file as ``{"problem.K": [2, 3, 4], ...}`` (dotted keys, lists of values, in the
+    file's order); :class:`InputError` naming the key on a mistake."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise InputError(str(path), "", f"cannot read the grid ({getattr(e, 'strerror', e)})",
+                         "give a grid TOML file (see docs/sweep.md)") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise InputError(str(path), "", f"not valid TOML: {e}", "fix the TOML syntax") from None
+    except RecursionError:
+        raise InputError(str(path), "", "nested too deeply", "write table.key = [values]") \
+            from None
+    grid: Grid = {}
+    _flatten(path, data, (), grid)
+    if not grid:
+        raise InputError(str(path), "", "the grid has no keys",
+                         'write e.g. problem.K = [2, 3, 4] (see docs/sweep.md)')
+    return grid
+
+
+def _flatten(path: Path, t: Mapping[str, Any], at: tuple[str, ...], grid: Grid) -> None:
+    for k, v in t.items():
+        keys = (*at, k)
+        dotted = ".".join(keys)
+        if "." in k or not k:
+            raise InputError(str(path), dotted, f"the key {k!r} is empty or has a dot in it",
+                             "override keys made of plain names only")
+        if not at and k not in GRID_TABLES:
+            raise InputError(str(path), dotted, f"{k!r} is not a table of a problem file",
+                             f"start each key with one of {', '.join(GRID_TABLES)}")
+        if isinstance(v, dict):
+            _flatten(path, v, keys, grid)
+            continue
+        if len(keys) < 2 and k != "goal":
+            raise InputError(str(path), dotted, f"{dotted} is a table, not a key in it",
+                             f"write {dotted}.KEY = [values]")
+        if not isinstance(v, list):
+            raise InputError(str(path), dotted, f"{dotted} must be a list of the values to try, "
+                             f"got {v!r:.40}", f"write {dotted} = [{_toml(v)}]")
+        if not v:
+            raise InputError(str(path), dotted, f"{dotted} lists no value",
+                             "give at least one value to try")
+        for x in _leaves(v):
+            if isinstance(x, datetime | date | dtime):
+                raise InputError(str(path), dotted, f"a date or time ({x}) is no problem value",
+                                 "give numbers, strings, booleans, lists or tables")
+        grid[dotted] = v
+
+
+def _leaves(v: Any) -> Iterable[Any]:
+    if isinstance(v, list):
+        for x in v:
+            yield from _leaves(x)
+    elif isinstance(v, dict):
+        for x in v.values():
+            yield from _leaves(x)
+    else:
+        yield v
+
+
+def _toml(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    return json.dumps(v, ensure_ascii=False, default=str)
+
+
+def combinations(grid: Grid | None) -> list[dict[str, Any]]:
+    """The grid's cartesian product, the last key varying fastest (one empty combination for
+    no grid)."""
+    if not grid:
+        return [{}]
+    keys = list(grid)
+    return [dict(zip(keys, values, strict=True)) for values in itertools.product(*grid.values())]
+
+
+def check_grid(grid: Grid, grid_path: Path, files: Sequence[Path]) -> None:
+    """Try each grid value alone on the first problem that loads as written, so a bad key or
+    value is one line naming the grid (values that fail only together, or only on another
+    problem, become error rows). This runs in this process, so problems whose domain is
+    registered or installed are tried before those naming a ``file.py`` of their own."""
+    for f in sorted(files, key=_names_a_domain_file):
+        try:
+            text = f.read_text(encoding="utf-8")
+            loads(text, f)
+        except Exception:  # its own error row will say why
+            continue
+        for key, values in grid.items():
+            for v in values:
+                try:
+                    loads(text, f, {key: v})
+                except InputError as e:
+                    raise InputError(str(grid_path), key, f"{key} = {_toml(v)} is refused: "
+                                     f"{e.problem} (tried on {f})", e.fix) from None
+                except Exception as e:  # a domain factory's own failure
+                    raise InputError(str(grid_path), key, f"{key} = {_toml(v)} is refused: "
+                                     f"{type(e).__name__}: {e} (tried on {f})",
+                                     "give a value the problem accepts") from None
+        return
+
+
+def _names_a_domain_file(f: Path) -> bool:
+    try:
+        dom = tomllib.loads(f.read_text(encoding="utf-8")).get("domain", {})
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError, RecursionError):
+        return True
+    name = dom.get("name") if isinstance(dom, dict) else None
+    return not isinstance(name, str) or ".py:" in name
+
+
+# --- instances -------------------------------------------------------------------------------
+
+
+def find_problems(patterns: Sequence[str]) -> list[Path]:
+    """The files the patterns match (``**`` recursive), each once, sorted within a pattern;
+    :class:`InputError` for a pattern that matches no file."""
+    out: list[Path] = []
+    seen: set[Path] = set()
+    for pat in patterns:
+        found = ([Path(pat)] if Path(pat).is_file() else  # a name with [ or * in it
+                 sorted(Path(m) for m in glob.glob(pat, recursive=True) if Path(m).is_file()))
+        if not found:
+            raise InputError(pat, "", "no file matches", "check the path; quote patterns with "
+                             "** so that the shell leaves them to ehatp")
+        for f in found:
+            if f.resolve() not in seen:
+                seen.add(f.resolve())
+                out.append(f)
+    return out
+
+
+def instance_key(text: str, path: Path, overrides: Mapping[str, Any]) -> str:
+    """sha256 of what decides an instance's result: the problem text, the overrides, the text
+    of a domain ``file.py`` it names (if any) and the ehatp version."""
+    payload = {"problem": text, "overrides": overrides, "ehatp": __version__,
+               "domain_file": _domain_file_text(text, path, overrides)}
+    blob = json.dumps(payload, sort_keys=True, ensure_ascii=False, default=str)
+    return hashlib.sha256(blob.encode("utf-8")).hexdigest()
+
+
+def _domain_file_text(text: str, path: Path, overrides: Mapping[str, Any]) -> str | None:
+    name = overrides.get("domain.name")
+    if name is None:
+        try:
+            dom = tomllib.loads(text).get("domain", {})
+        except (tomllib.TOMLDecodeError, RecursionError):
+            return None
+        name = dom.get("name") if isinstance(dom, dict) else None
+    if not isinstance(name, str) or ".py:" not in name:
+        return None
+    try:
+        return (path.parent / name.rpartition(":")[0]).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError, ValueError):
+        return None
+
+
+@dataclass(frozen=True)
+class Settings:
+    """What every task of a sweep shares."""
+
+    timeout: float | None = None
+    memory_gb: float | None = None
+    memory_mode: str = "rlimit"  # "watch" where workers share their process (Dask, Ray)
+    kill_after: float | None = None  # None: sweep_worker.kill_after(timeout)
+    validate: bool = False
+    policies: Path | None = None
+    marks: Path | None = None
+
+
+def make_tasks(files: Sequence[Path], grid: Grid | None, settings: Settings) -> list[Task]:
+    """One task per file and grid combination, files outermost. A file that cannot be read
+    still gets its tasks: the worker's row reports the error."""
+    combos = combinations(grid)
+    tasks: list[Task] = []
+    here = (os.getpid(), socket.gethostname())
+    for f in files:
+        try:
+            text = f.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError):
+            text = ""  # loads() says the file is empty; the row's error is about reading it
+        for combo in combos:
+            tasks.append(Task(
+                key=instance_key(text, f, combo), instance=str(f), path=str(f.resolve()),
+                text=text, overrides=combo, timeout=settings.timeout,
+                memory_gb=settings.memory_gb, memory_mode=settings.memory_mode,
+                kill_after=settings.kill_after,
+                validate=settings.validate,
+                policies=None if settings.policies is None else str(settings.policies.resolve()),
+                marks=None if settings.marks is None else str(settings.marks.resolve()),
+                driver_pid=here[0], driver_host=here[1]))
+    return tasks
+
+
+# --- executors -------------------------------------------------------------------------------
+
+
+class WorkerLost(Exception):
+    """The pool lost a worker process: the tasks it was running must run again."""
+
+
+class ExecutorFailed(Exception):
+    """The executor itself failed (not an instance): the sweep stops, --resume goes on."""
+
+
+class Pool(Protocol):
+    """Where tasks run: one future per task, and what a failed future means."""
+
+    name: str
+    slots: int  # tasks kept in flight
+
+    def submit(self, task: Task) -> cf.Future[Row]: ...
+
+    def failure(self, task: Task, exc: BaseException) -> Row:
+        """The row for a task whose future raised; :class:`WorkerLost` to run it again, or
+        :class:`ExecutorFailed` to stop."""
+        ...
+
+    def restart(self) -> None: ...
+
+    def close(self) -> None: ...
+
+
+def default_workers() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:
+        return os.cpu_count() or 1
+
+
+class LocalPool:
+    """Worker processes on this machine (``concurrent.futures.ProcessPoolExecutor``, started by
+    forkserver where there is one, else spawn; never ``max_tasks_per_child``, which hangs on
+    Python 3.11). A dead worker breaks the whole pool: :meth:`restart` makes a new one."""
+
+    name = "local"
+
+    def __init__(self, workers: int) -> None:
+        self.slots = workers
+        methods = multiprocessing.get_all_start_methods()
+        self.ctx = multiprocessing.get_context("forkserver" if "forkserver" in methods
+                                               else "spawn")
+        if "forkserver" in methods:
+            self.ctx.set_forkserver_preload(["ehatp.experiments.sweep_worker"])
+        self.ex = self._new()
+
+    def _new(self) -> cf.ProcessPoolExecutor:
+        return cf.ProcessPoolExecutor(max_workers=self.slots, mp_context=self.ctx)
+
+    def submit(self, task: Task) -> cf.Future[Row]:
+        return self.ex.submit(run_instance, task)
+
+    def failure(self, task: Task, exc: BaseException) -> Row:
+        if isinstance(exc, BrokenProcessPool):
+            raise WorkerLost from exc
+        raise ExecutorFailed(f"{type(exc).__name__}: {exc}") from exc
+
+    def restart(self) -> None:
+        self.ex.shutdown(wait=True, cancel_futures=True)
+        self.ex = self._new()
+
+    def close(self) -> None:
+        self.ex.shutdown(wait=True, cancel_futures=True)
+
+
+class DaskPool:
+    """A Dask cluster: the scheduler at ``address`` (any deployment, e.g. dask-jobqueue on
+    Slurm), else a ``LocalCluster`` of ``workers`` single-threaded processes."""
+
+    name = "dask"
+
+    def __init__(self, workers: int, address: str | None) -> None:
+        try:
+            distributed = importlib.import_module("distributed")
+        except ImportError:
+            raise InputError("--executor dask", "", "needs Dask's distributed scheduler, which "
+                             "is not installed", "pip install 'ehatp[dask]'") from None
+        self.distributed = distributed
+        self.cluster: Any = None
+        logging.getLogger("distributed").setLevel(logging.ERROR)
+        if address:
+            try:
+                self.client: Any = distributed.Client(address, timeout="10s")
+            except (OSError, TimeoutError, ValueError) as e:
+                raise InputError(f"--address {address}", "", f"no Dask scheduler answers there "
+                                 f"({' '.join(str(e).split())})", "start one (dask scheduler, "
+                                 "or a dask-jobqueue cluster) and give its address") from None
+        else:
+            self.cluster = distributed.LocalCluster(
+                n_workers=workers, threads_per_worker=1, processes=True,
+                dashboard_address=None, silence_logs=logging.ERROR)
+            self.client = distributed.Client(self.cluster)
+        self.executor = self.client.get_executor(pure=False)
+        threads = sum(self.client.nthreads().values())
+        self.slots = max(64, 4 * threads)
+
+    def submit(self, task: Task) -> cf.Future[Row]:
+        fut: cf.Future[Row] = self.executor.submit(run_instance, task)
+        return fut
+
+    def failure(self, task: Task, exc: BaseException) -> Row:
+        if isinstance(exc, self.distributed.KilledWorker):
+            return error_row(task, "crashed", "the Dask workers running it died (the system "
+                             "may have ended them for lack of memory): "
+                             f"{' '.join(str(exc).split())}")
+        raise ExecutorFailed(f"{type(exc).__name__}: {exc}") from exc
+
+    def restart(self) -> None:
+        """Dask restarts lost workers itself."""
+
+    def close(self) -> None:
+        self.executor.shutdown(wait=False)
+        self.client.close()
+        if self.cluster is not None:
+            self.cluster.close()
+
+
+class RayPool:
+    """A Ray cluster: the one at ``address`` (``auto``, ``ray://host:10001``), else a local
+    Ray started (and stopped) here with ``workers`` CPUs."""
+
+    name = "ray"
+
+    def __init__(self, workers: int, address: str | None) -> None:
+        try:
+            ray = importlib.import_module("ray")
+        except ImportError:
+            raise InputError("--executor ray", "", "needs Ray, which is not installed",
+                             "pip install 'ehatp[ray]'") from None
+        self.ray = ray
+        self.owned = not ray.is_initialized()
+        if self.owned:
+            try:
+                ray.init(address=address, num_cpus=None if address else workers,
+                         include_dashboard=False, log_to_driver=False,
+                         logging_level=logging.ERROR, configure_logging=True)
+            except (ConnectionError, RuntimeError, ValueError) as e:
+                raise InputError(f"--address {address}", "", f"cannot join a Ray cluster there "
+                                 f"({' '.join(str(e).split())})",
+                                 "start one (ray start --head) and give its address") from None
+        self.remote = ray.remote(num_cpus=1, max_retries=1)(run_instance)
+        cpus = int(ray.cluster_resources().get("CPU", workers))
+        self.slots = max(64, 4 * cpus)
+
+    def submit(self, task: Task) -> cf.Future[Row]:
+        fut: cf.Future[Row] = self.remote.remote(task).future()
+        return fut
+
+    def failure(self, task: Task, exc: BaseException) -> Row:
+        errors = self.ray.exceptions
+        if isinstance(exc, errors.WorkerCrashedError | errors.OutOfMemoryError
+                      | errors.NodeDiedError):
+            return error_row(task, "crashed", "the Ray worker running it died (the system may "
+                             "have ended it for lack of memory): "
+                             f"{type(exc).__name__}")
+        raise ExecutorFailed(f"{type(exc).__name__}: {exc}") from exc
+
+    def restart(self) -> None:
+        """Ray restarts lost workers itself."""
+
+    def close(self) -> None:
+        if self.owned:
+            self.ray.shutdown()
+
+
+def open_pool(kind: ExecutorKind, workers: int, address: str | None) -> Pool:
+    """The executor named on the command line (:class:`InputError` if it cannot start)."""
+    if kind is ExecutorKind.local:
+        if address:
+            raise InputError("--address", "", "the local executor takes no address",
+                             "use --executor dask or --executor ray with --address")
+        return LocalPool(workers)
+    if kind is ExecutorKind.dask:
+        return DaskPool(workers, address)
+    return RayPool(workers, address)
+
+
+# --- running ---------------------------------------------------------------------------------
+
+
+def run_tasks(tasks: Iterable[Task], pool: Pool, emit: Callable[[Row], None]) -> None:
+    """Run every task on ``pool`` and ``emit`` each row as it arrives. When the pool loses a
+    worker, the tasks that were in flight run again one at a time; one that loses its worker
+    even alone becomes a ``crashed`` error row (one ended by its watchdog returns its
+    ``killed`` row at once). :class:`ExecutorFailed` stops the run."""
+    queue = deque(tasks)
+    suspects: deque[Task] = deque()
+    inflight: dict[cf.Future[Row], Task] = {}
+    solo: Task | None = None  # a suspect running alone
+
+    def settle(fut: cf.Future[Row], task: Task, lost: list[Task]) -> None:
+        try:
+            row = fut.result()
+        except Exception as e:  # the pool says what it means
+            try:
+                row = pool.failure(task, e)
+            except WorkerLost:
+                lost.append(task)
+                return
+        emit(row)
+
+    try:
+        while queue or suspects or inflight:
+            if suspects and not inflight:
+                solo = suspects.popleft()
+                inflight[pool.submit(solo)] = solo
+            elif not suspects:
+                solo = None
+                while queue and len(inflight) < pool.slots:
+                    t = queue.popleft()
+                    inflight[pool.submit(t)] = t
+            done, _ = cf.wait(inflight, return_when=cf.FIRST_COMPLETED)
+            lost: list[Task] = []
+            for fut in done:
+                settle(fut, inflight.pop(fut), lost)
+            if not lost:
+                continue
+            for fut, task in list(inflight.items()):  # a broken pool fails them all
+                settle(fut, task, lost)
+            inflight.clear()
+            pool.restart()
+            if solo is not None and lost == [solo]:
+                emit(error_row(solo, "crashed", "its worker process died while it ran alone "
+                               "(the system may have ended it for lack of memory, or native "
+                               "code crashed)"))
+            else:
+                suspects.extend(lost)
+            solo = None
+    finally:
+        for fut in inflight:
+            fut.cancel()
+
+
+# --- the results file ------------------------------------------------------------------------
+
+
+def read_rows(path: Path, *, repair: bool = False) -> list[Row]:
+    """The rows of a results file. A last line cut short (the run was stopped while writing
+    it) is ignored, and with ``repair`` cut from the file so appending starts on a new line;
+    any other line that is not a row is an :class:`InputError`."""
+    try:
+        data = path.read_bytes()
+    except OSError as e:
+        raise InputError(str(path), "", f"cannot read the results ({e.strerror or e})",
+                         "give a results file written by ehatp sweep --out") from None
+    end = data.rfind(b"\n") + 1
+    if repair and end < len(data):
+        with path.open("r+b") as f:
+            f.truncate(end)
+    rows: list[Row] = []
+    for i, line in enumerate(data[:end].decode("utf-8", "replace").splitlines(), 1):
+        if not line.strip():
+            continue
+        try:
+            row = json.loads(line)
+        except (ValueError, RecursionError):
+            row = None
+        if not isinstance(row, dict) or not isinstance(row.get("key"), str):
+            raise InputError(str(path), str(i), "not a row written by ehatp sweep",
+                             "remove that line, or give another --out") from None
+        rows.append(row)
+    return rows
+
+
+def row_line(row: Row) -> str:
+    """A row as one JSON line (the keys in :data:`ROW_KEYS` order, as the worker made it)."""
+    return json.dumps(row, ensure_ascii=False, default=str) + "\n"
+
+
+# --- the summary and the CSV -----------------------------------------------------------------
+
+
+def overrides_text(overrides: Mapping[str, Any]) -> str:
+    return " ".join(f"{k}={_toml(v)}" for k, v in overrides.items())
+
+
+def _n(v: Any) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    if isinstance(v, int) and not isinstance(v, bool):
+        return f"{v:,}"
+    return str(v)
+
+
+def summary_table(rows: Sequence[Row], *, per_row_up_to: int = 30) -> Table:
+    """One line per row for a small sweep, else one line per problem file."""
+    if len(rows) <= per_row_up_to:
+        t = Table(title="ehatp sweep", title_justify="left")
+        over = any(r.get("overrides") for r in rows)
+        for col in ("instance", *(["overrides"] if over else []), "status", "cost", "distinct",
+                    "|W|", "time s"):
+            t.add_column(col, justify="right" if col in ("cost", "distinct", "|W|", "time s")
+                         else "left")
+        for r in rows:
+            st = r.get("stats") or {}
+            status = str(r.get("status") or "")
+            if r.get("error_kind"):
+                status += f" ({r['error_kind']})"
+            if r.get("valid") is False:
+                status += " INVALID"
+            t.add_row(str(r.get("instance")),
+                      *([overrides_text(r.get("overrides") or {})] if over else []),
+                      status, _n(r.get("cost")), _n(st.get("distinct")),
+                      _n(st.get("max_worlds")), _n(r.get("time_s")),
+                      style="red" if r.get("status") == "error" else None)
+        return t
+    t = Table(title="ehatp sweep, by problem file", title_justify="left")
+    for col in ("instance", "runs", "solved", "other", "errors", "cost", "max distinct",
+                "max |W|", "time s"):
+        t.add_column(col, justify="left" if col in ("instance", "other") else "right")
+    by_file: dict[str, list[Row]] = {}
+    for r in rows:
+        by_file.setdefault(str(r.get("instance")), []).append(r)
+    for inst, rs in by_file.items():
+        costs = [r["cost"] for r in rs if isinstance(r.get("cost"), int | float)]
+        stats = [r.get("stats") or {} for r in rs]
+        others: dict[str, int] = {}
+        for r in rs:
+            if r.get("status") not in ("solved", "error"):
+                others[str(r.get("status"))] = others.get(str(r.get("status")), 0) + 1
+        errors = sum(r.get("status") == "error" for r in rs)
+        t.add_row(inst, str(len(rs)), str(sum(r.get("status") == "solved" for r in rs)),
+                  " ".join(f"{k} {v}" for k, v in sorted(others.items())), str(errors),
+                  f"{_n(min(costs))}–{_n(max(costs))}" if costs else "",
+                  _n(max((s.get("distinct") or 0 for s in stats), default=0)),
+                  _n(max((s.get("max_worlds") or 0 for s in stats), default=0)),
+                  _n(round(sum(r.get("time_s") or 0 for r in rs), 2)),
+                  style="red" if errors else None)
+    return t
+
+
+def write_csv(rows: Sequence[Row], path: Path) -> None:
+    """The rows as CSV: one column per override and per statistic (``stats.NAME``)."""
+    over: list[str] = []
+    stats: list[str] = []
+    for r in rows:
+        over += [k for k in (r.get("overrides") or {}) if k not in over]
+        stats += [k for k in (r.get("stats") or {}) if k not in stats]
+    main = [k for k in ROW_KEYS if k not in ("overrides", "stats")]
+    extra = sorted({k for r in rows for k in r} - set(ROW_KEYS) - {"traceback"})
+    cols = ["instance", *over, *[k for k in main if k != "instance"],
+            *[f"stats.{k}" for k in stats], *extra]
+    with path.open("w", encoding="utf-8", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(cols)
+        for r in rows:
+            o, st = r.get("overrides") or {}, r.get("stats") or {}
+            line = []
+            for c in cols:
+                if c in over:
+                    v = o.get(c)
+                elif c.startswith("stats."):
+                    v = st.get(c[6:])
+                else:
+                    v = r.get(c)
+                line.append("" if v is None else _toml(v) if isinstance(v, list | dict)
+                            else str(v).lower() if isinstance(v, bool) else str(v))
+            w.writerow(line)
+
+
+# --- the plot --------------------------------------------------------------------------------
+
+
+def plot_key(rows: Sequence[Row], x: str) -> str:
+    """The override ``x`` names: exactly, or by its last part(s) if that is unambiguous."""
+    keys: list[str] = []
+    for r in rows:
+        keys += [k for k in (r.get("overrides") or {}) if k not in keys]
+    if x in keys:
+        return x
+    hits = [k for k in keys if k.endswith("." + x)]
+    if len(hits) == 1:
+        return hits[0]
+    have = ", ".join(keys) if keys else "none (the sweep had no --grid)"
+    raise InputError(f"--x {x}", "", "no override of that name in the results"
+                     if not hits else f"ambiguous: {', '.join(hits)}", f"use one of: {have}")
+
+
+def plot(rows: Sequence[Row], x: str, out: Path) -> tuple[int, int]:
+    """Draw time, distinct states and |W| against the override ``x``, one line per
+    combination of the other overrides (and problem file); return (lines, points)."""
+    try:
+        figure = importlib.import_module("matplotlib.figure")
+    except ImportError:
+        raise InputError("--plot", "", "drawing needs matplotlib, which is not installed",
+                         PLOT_EXTRA) from None
+    key = plot_key(rows, x)
+    usable = [r for r in rows if key in (r.get("overrides") or {}) and r.get("status") != "error"
+              and isinstance(r.get("stats"), dict)]
+    if not usable:
+        raise InputError(f"--x {x}", "", f"no row with {key} has statistics (all errors?)",
+                         "plot a sweep whose instances ran")
+    xs_all = [r["overrides"][key] for r in usable]
+    numeric = all(isinstance(v, int | float) and not isinstance(v, bool) for v in xs_all)
+    cats: list[Any] = []
+    for v in xs_all:
+        if v not in cats:
+            cats.append(v)
+
+    def pos(v: Any) -> float:
+        return float(v) if numeric else float(cats.index(v))
+
+    lines: dict[str, list[Row]] = {}
+    files = {r.get("instance") for r in usable}
+    for r in usable:
+        rest = {k: v for k, v in r["overrides"].items() if k != key}
+        label = " ".join([Path(str(r.get("instance"))).stem] if len(files) > 1 else [])
+        label = " ".join(p for p in (label, " ".join(f"{k.rsplit('.', 1)[-1]}={_toml(v)}"
+                                                      for k, v in rest.items())) if p)
+        lines.setdefault(label or "all", []).append(r)
+    metrics = (("time_s", "time (s)"), ("distinct", "distinct states"), ("max_worlds", "|W|"))
+    fig = figure.Figure(figsize=(15, 4.8), layout="constrained")
+    axes = fig.subplots(1, 3)
+    for ax, (m, title) in zip(axes, metrics, strict=True):
+        values: list[float] = []
+        for label, rs in lines.items():
+            pts = sorted((pos(r["overrides"][key]),
+                          r.get(m) if m == "time_s" else r["stats"].get(m),
+                          r.get("status") == "solved") for r in rs)
+            pts = [p for p in pts if isinstance(p[1], int | float)]
+            if not pts:
+                continue
+            values += [float(p[1]) for p in pts if p[1] is not None]
+            (line,) = ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o",
+                              label=label)
+            unsolved = [p for p in pts if not p[2]]
+            if unsolved:
+                ax.plot([p[0] for p in unsolved], [p[1] for p in unsolved], "x",
+                        color=line.get_color(), markersize=10)
+        positive = [v for v in values if v > 0]
+        if positive and max(positive) / min(positive) > 100:
+            ax.set_yscale("log")
+        ax.set_title(title)
+        ax.set_xlabel(key)
+        if not numeric:
+            ax.set_xticks(range(len(cats)), [_toml(c) for c in cats])
+        ax.grid(True, alpha=0.3)
+    if 1 < len(lines) <= 16:
+        axes[0].legend(fontsize="small")
+    fig.suptitle(f"ehatp sweep: against {key} (x: not solved)")
+    try:
+        fig.savefig(out)
+    except (OSError, ValueError) as e:
+        raise InputError(str(out), "", f"cannot write the plot ({e})",
+                         "choose another --out (.png, .svg or .pdf)") from None
+    return len(lines), len(usable)

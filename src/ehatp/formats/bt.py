@@ -1,0 +1,385 @@
+"""A robot policy as a behaviour tree, for BehaviorTree.CPP v4 or py_trees (``ehatp export bt``).
+
+The policy is a graph (docs/policy-format.md); the tree follows it from the root:
+
+- a robot move becomes action nodes: ``RobotAction`` for an action, ``RobotWait`` for a wait,
+  ``Say`` for an inform, a question to the human about its intention (``ask``) or an
+  announcement of the robot's own (``announce``), ``Silence`` for the robot's silent move at a
+  speech opening; an action (or wait) said with an inform is a ``Say`` then the
+  ``RobotAction`` (or ``RobotWait``);
+- a human choice becomes ``WaitHumanAction``, a stateful node that runs until the human acts
+  and writes what it observed to a blackboard entry, then a ``Fallback`` with one branch per
+  move the policy covers -- a ``HumanDid`` condition on that entry, a ``Say`` with the robot's
+  answer when the move is a question, then the rest of the policy -- and a last branch for
+  anything else: ``ReportUncovered`` then ``AlwaysFailure``;
+- a goal is ``GoalReached``;
+- a node with more than one move into it (a state shared by several paths) becomes a tree of
+  its own, defined once and used through ``<SubTree ID="Node_N"/>``.
+
+One structure (:class:`Forest` of :class:`BTNode`) is built from the policy and then written as
+BehaviorTree.CPP v4 XML (with a ``TreeNodesModel`` for Groot) or as a py_trees module; the
+runnable py_trees behaviours live in :mod:`ehatp.formats.bt_py_trees` (``ehatp[bt]``). See
+``docs/behaviour-trees.md``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import StrEnum
+from typing import TYPE_CHECKING, Any
+from xml.sax.saxutils import escape
+
+from .policy import Policy, PolicyMove
+
+if TYPE_CHECKING:
+    from ..model.problem import Problem
+    from .bt_py_trees import HumanFn, OnGoal, OnUncovered, RobotFn
+
+MAIN_TREE = "Policy"
+SEP = ";"  # list separator in a port value (BehaviorTree.CPP splits vectors on it)
+
+
+class BTFormat(StrEnum):
+    btcpp4 = "btcpp4"
+    py_trees = "py_trees"
+
+
+# The custom nodes: (kind, ID, description, [(port direction, name, description)]).
+CUSTOM_NODES: tuple[tuple[str, str, str, tuple[tuple[str, str, str], ...]], ...] = (
+    ("Action", "RobotAction", "The robot does one action of its domain.", (
+        ("input", "action", "the action as the policy prints it, e.g. place(r, box1)"),
+        ("input", "action_name", "the action's name, e.g. place"),
+        ("input", "args", "its arguments, separated by ';'"),
+    )),
+    ("Action", "RobotWait", "The robot waits: it lets the human take a turn.", ()),
+    ("Action", "Say", "The robot speaks: it informs the human of literals, answers the "
+     "human's question truthfully, asks the human what it is about to do, or announces what "
+     "it is doing itself.", (
+        ("input", "kind", "inform, answer, ask or announce"),
+        ("input", "literals", "inform: the literals told, separated by ';'"),
+        ("input", "question", "answer: the question asked; ask: what the robot asks about "
+         "(intention)"),
+        ("input", "answer", "answer: yes or no (absent when the export did not know: the "
+         "robot answers from what it knows)"),
+        ("input", "intention", "announce: the robot's tasks as it announces them, e.g. "
+         "clean(room), tidy(desk)"),
+    )),
+    ("Action", "Silence", "The robot stays silent where it could speak (the speech opening "
+     "before the human's first move); it does nothing.", ()),
+    ("Action", "WaitHumanAction", "Runs until the human acts, then writes the action observed "
+     "(as the policy prints it) to its output port.", (
+        ("output", "action", "the human's action, e.g. pick(w) or pass"),
+        ("input", "expected", "the actions the policy covers here, separated by ';'"),
+    )),
+    ("Condition", "HumanDid", "Succeeds when the observed human action is this one (spaces "
+     "ignored).", (
+        ("input", "observed", "the action WaitHumanAction observed"),
+        ("input", "action", "the action of this branch"),
+    )),
+    ("Action", "ReportUncovered", "Reports that the human did something the policy does not "
+     "cover (unless the observed action is one of expected: a branch for it ran and failed "
+     "below, where that was reported), then succeeds.", (
+        ("input", "observed", "the action WaitHumanAction observed"),
+        ("input", "expected", "the actions the policy covers here, separated by ';'"),
+    )),
+    ("Action", "GoalReached", "The task is done (a goal of the policy); succeeds.", (
+        ("input", "node", "the policy node reached"),
+    )),
+)
+CUSTOM_IDS = frozenset(c[1] for c in CUSTOM_NODES)
+
+
+@dataclass
+class BTNode:
+    """One node of the tree: its BehaviorTree.CPP tag (node ID) and ports, in writing order.
+    Not written to XML: ``completes``, the label of the robot's policy move that this node
+    finishes (the last node of each robot move), and ``node``, the policy node of a human
+    choice's ``Fallback``."""
+
+    tag: str
+    attrs: dict[str, str] = field(default_factory=dict)
+    children: list[BTNode] = field(default_factory=list)
+    completes: str | None = None
+    node: int | None = None
+
+
+@dataclass
+class Forest:
+    """The main tree and one tree per shared policy node, by ID (the main tree first, then by
+    node id)."""
+
+    main: str
+    trees: dict[str, BTNode]
+    policy: Policy
+
+
+def tree_id(node: int) -> str:
+    """The BehaviorTree ID of the shared policy node ``node``."""
+    return f"Node_{node}"
+
+
+def blackboard_key(node: int) -> str:
+    """The blackboard entry where the human's action at policy node ``node`` is written."""
+    return f"human_action_{node}"
+
+
+def shared_nodes(policy: Policy) -> list[int]:
+    """The ids of the nodes with more than one move into them, ascending."""
+    into = [0] * len(policy.nodes)
+    for _, m in policy.edges():
+        into[m.to] += 1
+    return [i for i, n in enumerate(into) if n > 1]
+
+
+def from_policy(policy: Policy, answers: dict[tuple[int, str], bool] | None = None) -> Forest:
+    """The behaviour tree of ``policy``. ``answers`` maps (policy node, question asked there)
+    to the robot's truthful answer (:func:`answers_of`); without it the ``Say`` of an answer
+    leaves the answer to the robot."""
+    shared = set(shared_nodes(policy))
+    robot = policy.agents["robot"]
+    answers = answers or {}
+
+    def chain(n: int, top: int) -> list[BTNode]:
+        """The nodes that execute the policy from node ``n``, in a sequence, within the tree
+        of node ``top``."""
+        out: list[BTNode] = []
+        while True:
+            if n != top and n in shared:
+                out.append(BTNode("SubTree", {"ID": tree_id(n)}))
+                return out
+            node = policy.nodes[n]
+            if not node.moves:
+                out.append(BTNode("GoalReached", {"node": str(n)}) if node.goal else
+                           BTNode("AlwaysFailure", {"name": f"dead end at node {n}"}))
+                return out
+            if len(node.moves) == 1 and node.moves[0].agent == robot:
+                out.extend(robot_nodes(node.moves[0]))
+                n = node.moves[0].to
+                continue
+            key = "{" + blackboard_key(n) + "}"
+            expected = SEP.join(m.action for m in node.moves)
+            branches = []
+            for m in node.moves:
+                said = []
+                if m.kind == "ask" and m.agent != robot:
+                    attrs = {"kind": "answer", "question": m.args[0] if m.args else m.action}
+                    yes = answers.get((n, m.action))
+                    if yes is not None:
+                        attrs["answer"] = "yes" if yes else "no"
+                    said.append(BTNode("Say", attrs))
+                branches.append(BTNode("Sequence", {"name": f"{m.agent} {m.action}"}, [
+                    BTNode("HumanDid", {"observed": key, "action": m.action}), *said,
+                    *chain(m.to, top)]))
+            branches.append(BTNode("Sequence", {"name": "uncovered"}, [
+                BTNode("ReportUncovered", {"observed": key, "expected": expected}),
+                BTNode("AlwaysFailure")]))
+            who = node.to_move or node.moves[0].agent
+            out.append(BTNode("WaitHumanAction", {"action": key, "expected": expected}))
+            out.append(BTNode("Fallback", {"name": f"{who}'s choice at node {n}"}, branches,
+                              node=n))
+            return out
+
+    trees = {MAIN_TREE: BTNode("Sequence", {"name": "node 0"}, chain(0, 0))}
+    for s in sorted(shared):
+        trees[tree_id(s)] = BTNode("Sequence", {"name": f"node {s}"}, chain(s, s))
+    return Forest(MAIN_TREE, trees, policy)
+
+
+def robot_nodes(m: PolicyMove) -> list[BTNode]:
+    """The nodes of one robot move; the last one ``completes`` it."""
+    out: list[BTNode] = []
+    if m.kind == "inform":
+        out.append(BTNode("Say", {"kind": "inform", "literals": SEP.join(m.args)}))
+    elif m.kind == "ask":  # the robot asks the human's intention (§5)
+        out.append(BTNode("Say", {"kind": "ask", "question": m.args[0] if m.args else
+                                  m.action.removeprefix("ask(").removesuffix(")")}))
+    elif m.kind == "announce":  # the robot tells its own intention (§5)
+        out.append(BTNode("Say", {"kind": "announce", "intention": m.action.removeprefix(
+            "announce(").removesuffix(")")}))
+    elif m.kind == "silence":
+        out.append(BTNode("Silence"))
+    elif m.kind in ("action", "wait"):
+        if m.told:
+            out.append(BTNode("Say", {"kind": "inform", "literals": SEP.join(m.told)}))
+        if m.kind == "wait":
+            out.append(BTNode("RobotWait"))
+        else:
+            action = m.action.rsplit(" + ", 1)[-1] if m.told else m.action
+            out.append(BTNode("RobotAction", {"action": action, "action_name": m.name,
+                                              "args": SEP.join(m.args)}))
+    else:
+        raise ValueError(f"a robot move of kind {m.kind!r} ({m.action}) has no behaviour")
+    out[-1].completes = m.action
+    return out
+
+
+def answers_of(problem: Problem, policy: Policy) -> dict[tuple[int, str], bool]:
+    """The robot's truthful answer to every question the policy's human may ask, by (policy
+    node, question label): the policy is walked with the problem's semantics (each node once).
+    Raises :class:`~ehatp.errors.PolicyMismatch` when the policy does not fit."""
+    from ..run.executor import Executor
+
+    ex = Executor(problem, policy)
+    ex.replay_opening()
+    states = {0: ex.state}
+    out: dict[tuple[int, str], bool] = {}
+    for i in policy.topological_order():
+        es, node = states[i], policy.nodes[i]
+        for m in node.moves:
+            if m.kind == "ask" and m.agent != policy.agents["robot"]:
+                yes = ex.answer(es, m.action)
+                if yes is not None:
+                    out[(i, m.action)] = yes
+            if m.to not in states:
+                # the move the edge records (one label may stand for several moves)
+                child = ex.edge_move(node, m, es).child
+                assert child is not None
+                states[m.to] = child
+    return out
+
+
+# --------------------------------------------------------------------------- BehaviorTree.CPP
+
+
+def _attr(v: str) -> str:
+    return '"' + escape(v, {'"': "&quot;"}) + '"'
+
+
+def _write(node: BTNode, depth: int, out: list[str]) -> None:
+    pad = "  " * depth
+    attrs = "".join(f" {k}={_attr(v)}" for k, v in node.attrs.items())
+    if not node.children:
+        out.append(f"{pad}<{node.tag}{attrs}/>")
+        return
+    out.append(f"{pad}<{node.tag}{attrs}>")
+    for c in node.children:
+        _write(c, depth + 1, out)
+    out.append(f"{pad}</{node.tag}>")
+
+
+def to_btcpp(forest: Forest) -> str:
+    """BehaviorTree.CPP v4 XML: every tree, then the ``TreeNodesModel`` Groot reads. The same
+    policy always gives the same bytes."""
+    p = forest.policy
+    out = ['<?xml version="1.0" encoding="UTF-8"?>',
+           f'<root BTCPP_format="4" main_tree_to_execute={_attr(forest.main)}>',
+           "  <!-- " + escape(f"ehatp policy for {p.problem} ({p.domain}): robot "
+                              f"{p.agents['robot']}, human {p.agents['human']}, cost {p.cost}, "
+                              f"{len(p.nodes)} nodes; written by ehatp export bt")
+           .replace("--", "- -") + " -->"]
+    for tid, root in forest.trees.items():
+        out.append(f"  <BehaviorTree ID={_attr(tid)}>")
+        _write(root, 2, out)
+        out.append("  </BehaviorTree>")
+    out.append("  <TreeNodesModel>")
+    for kind, nid, desc, ports in CUSTOM_NODES:
+        out.append(f"    <{kind} ID={_attr(nid)}>")
+        out.append(f"      <!-- {escape(desc)} -->")
+        for direction, name, pdesc in ports:
+            out.append(f"      <{direction}_port name={_attr(name)}>{escape(pdesc)}"
+                       f"</{direction}_port>")
+        out.append(f"    </{kind}>")
+    out.append("  </TreeNodesModel>")
+    out.append("</root>")
+    return "\n".join(out) + "\n"
+
+
+# --------------------------------------------------------------------------- py_trees
+
+
+def build_py_tree(policy: Policy, *, robot: RobotFn, human: HumanFn,
+                  on_goal: OnGoal | None = None, on_uncovered: OnUncovered | None = None,
+                  problem: Problem | None = None) -> Any:
+    """The policy's behaviour tree as py_trees behaviours, ready to tick (needs ``py_trees``:
+    ``pip install 'ehatp[bt]'``). ``robot(command)`` does the robot's part and ``human(turn)``
+    says what the human did; see :mod:`ehatp.formats.bt_py_trees`. With ``problem`` the robot's
+    answers to questions are worked out in advance (:func:`answers_of`). Returns the root
+    behaviour (a ``py_trees.behaviour.Behaviour``)."""
+    try:
+        from . import bt_py_trees
+    except ImportError as e:
+        raise ImportError(f"build_py_tree needs py_trees ({e}): pip install 'ehatp[bt]'"
+                          ) from None
+
+    forest = from_policy(policy, None if problem is None else answers_of(problem, policy))
+    return bt_py_trees.build(forest, bt_py_trees.Interface(robot, human, on_goal, on_uncovered))
+
+
+def _py(v: str) -> str:
+    return repr(v)
+
+
+def _expr(node: BTNode, depth: int, out: list[str], choices: list[BTNode] | None = None) -> None:
+    """Append the py_trees expression of ``node`` (one call per line, nested by indent). A
+    human choice is a call of its own function (``choice_N()``), added to ``choices`` to be
+    written apart, so that nesting stays shallow however deep the policy."""
+    pad = "    " * depth
+    a = node.attrs
+    if node.tag == "Fallback" and choices is not None and node.node is not None:
+        choices.append(node)
+        out.append(f"{pad}choice_{node.node}(),")
+        return
+    if node.tag in ("Sequence", "Fallback"):
+        cls = "Sequence" if node.tag == "Sequence" else "Selector"
+        out.append(f"{pad}{cls}({_py(a.get('name', node.tag))}, memory=True, children=[")
+        for c in node.children:
+            _expr(c, depth + 1, out, choices)
+        out.append(f"{pad}]),")
+        return
+    if node.tag == "SubTree":
+        fn = a["ID"].lower()
+        out.append(f"{pad}SubTree({_py(a['ID'])}, {fn}),")
+        return
+    if node.tag == "AlwaysFailure":
+        out.append(f"{pad}Failure({_py(a.get('name', 'AlwaysFailure'))}),")
+        return
+    args = ["io", *(f"{k}={_py(v)}" for k, v in a.items() if k != "name")]
+    if node.completes is not None:
+        args.append(f"completes={_py(node.completes)}")
+    out.append(f"{pad}{node.tag}({', '.join(args)}),")
+
+
+def to_py_trees_source(forest: Forest) -> str:
+    """A Python module whose ``make_tree(robot, human, ...)`` builds the same behaviours as
+    :func:`build_py_tree` (with ``ehatp[bt]`` installed)."""
+    p = forest.policy
+    out = [f'"""Behaviour tree of the ehatp policy for {p.problem} ({p.domain}), for py_trees.',
+           "",
+           "Written by `ehatp export bt --format py_trees`; needs ehatp[bt]. Build it with",
+           "``make_tree(robot, human)`` and tick it (see docs/behaviour-trees.md).",
+           '"""', "",
+           "from py_trees.behaviour import Behaviour",
+           "from py_trees.behaviours import Failure",
+           "from py_trees.composites import Selector, Sequence",
+           "",
+           "from ehatp.formats.bt_py_trees import (",
+           "    GoalReached, HumanDid, HumanFn, Interface, OnGoal, OnUncovered, ReportUncovered,",
+           "    RobotAction, RobotFn, RobotWait, Say, Silence, SubTree, WaitHumanAction,",
+           ")", "", "",
+           "def make_tree(robot: RobotFn, human: HumanFn, on_goal: OnGoal | None = None,",
+           "              on_uncovered: OnUncovered | None = None) -> Behaviour:",
+           f'    """The tree of policy {p.problem!r}: robot {p.agents["robot"]}, human '
+           f'{p.agents["human"]}, cost {p.cost}."""',
+           "    io = Interface(robot, human, on_goal, on_uncovered)"]
+
+    def function(name: str, root: BTNode) -> None:
+        # a choice written inside this one gets its function after it (a queue: the order
+        # is that of the policy, and every name is defined before make_tree returns)
+        choices: list[BTNode] = []
+        out.extend(["", f"    def {name}() -> Behaviour:", "        return ("])
+        _expr(root, 3, out, choices)
+        out[-1] = out[-1].rstrip(",")
+        out.append("        )")
+        for c in choices:
+            # the choice's own Selector, its branches' choices deferred in turn
+            function(f"choice_{c.node}", BTNode("Fallback", c.attrs, c.children))
+
+    for tid, root in forest.trees.items():
+        function(tid.lower(), root)
+    out += ["", f"    return {forest.main.lower()}()"]
+    return "\n".join(out) + "\n"
+
+
+__all__ = ["CUSTOM_IDS", "CUSTOM_NODES", "MAIN_TREE", "BTFormat", "BTNode", "Forest",
+           "answers_of", "blackboard_key", "build_py_tree", "from_policy", "shared_nodes",
+           "to_btcpp", "to_py_trees_source", "tree_id"]

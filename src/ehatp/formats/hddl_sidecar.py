@@ -1,0 +1,158 @@
+"""The sidecar of an HDDL import (docs/hddl.md, "The sidecar"): what HDDL does not say -- the
+agents' names, what the human perceives, when the two are together, the other agent -- read from
+TOML or from a Python module, and the literals it writes (``"at(?x, depot)"``, ``"not busy"``).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import re
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..errors import HddlUnsupported
+
+AGENTS = ("robot", "human")
+CLASSES = ("observable", "inferable", "hidden")
+
+
+# --- the sidecar -----------------------------------------------------------------------------
+
+
+@dataclass
+class Sidecar:
+    """What HDDL does not say (docs/hddl.md, "The sidecar"). Literals are written
+    ``"at(?x, depot)"`` or ``"not busy"``: ``?name`` is a parameter of the predicate being
+    described (in ``when``), anything else an object."""
+
+    robot: str = "R"
+    human: str = "H"
+    default: str = "observable"  # the class of a predicate not listed in ``classes``
+    classes: dict[str, str] = field(default_factory=dict)  # predicate -> class
+    when: dict[str, list[str]] = field(default_factory=dict)  # observable while these hold
+    copresence: list[str] = field(default_factory=list)  # ground literals; [] = always
+    other: str = "none"  # the other agent's model: "none" or "same" (the HDDL model too)
+    other_agenda: list[str] = field(default_factory=list)
+    # what the human expects of the robot, when the HDDL model is the robot's: "plan" (it
+    # knows the robot's model, M_R^H = M_R, and follows which methods it may be using) or
+    # "nothing" (M_R^H empty: it sees the robot's actions, and expects none)
+    expects: str = "plan"
+    problem: dict[str, Any] = field(default_factory=dict)  # [problem] K, starts, name
+    limits: dict[str, Any] = field(default_factory=dict)  # [limits] of the problem
+    customize: Path | None = None  # a Python sidecar with customize(d), run last
+    source: str = "<defaults>"
+
+    def check(self) -> None:
+        where = self.source
+        if self.default not in CLASSES:
+            raise HddlUnsupported(f"{where}: [observability] default = {self.default!r}; "
+                                  f"use one of {', '.join(CLASSES)}")
+        for p, c in self.classes.items():
+            if c not in CLASSES:
+                raise HddlUnsupported(f"{where}: [observability] {p} = {c!r}; use one of "
+                                      f"{', '.join(CLASSES)} (or [observability.when])")
+        if self.other not in ("none", "same"):
+            raise HddlUnsupported(f"{where}: [other] model = {self.other!r}; use \"none\" or "
+                                  "\"same\"")
+        if self.expects not in ("plan", "nothing"):
+            raise HddlUnsupported(f"{where}: [other] expects = {self.expects!r}; use \"plan\" "
+                                  "or \"nothing\"")
+        if self.other_agenda and self.other == "none" and self.customize is None:
+            raise HddlUnsupported(f"{where}: [other] agenda needs model = \"same\" (or a "
+                                  "Python sidecar whose customize(d) gives the other agent "
+                                  "its tasks)")
+
+
+_SIDECAR_KEYS = {
+    "agents": {"robot", "human"},
+    "observability": {"default", "when", "observable", "inferable", "hidden"},
+    "copresence": {"when"},
+    "other": {"model", "agenda", "expects"},
+    "problem": {"name", "K", "starts", "description"},
+    "limits": {"timeout", "max_states", "max_depth", "max_memory", "max_decomposition",
+               "symmetry"},
+}
+
+
+def read_sidecar(path: str | Path | None) -> Sidecar:
+    """Read a TOML sidecar, or a Python one (a module with a ``SIDECAR`` dict of the same
+    tables and, optionally, ``customize(d)`` run on the built domain); None: the defaults (a
+    robot-only problem, every predicate observable, always together)."""
+    if path is None:
+        return Sidecar()
+    p = Path(path)
+    if p.suffix == ".py":
+        spec = importlib.util.spec_from_file_location(f"_ehatp_sidecar_{abs(hash(p))}", p)
+        if spec is None or spec.loader is None:
+            raise HddlUnsupported(f"{p}: cannot load this Python sidecar")
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+        data = getattr(mod, "SIDECAR", {})
+        side = _sidecar_from(data, str(p), check=False)
+        if callable(getattr(mod, "customize", None)):
+            side.customize = p.resolve()
+        side.check()
+        return side
+    try:
+        data = tomllib.loads(p.read_text(encoding="utf-8"))
+    except OSError as e:
+        raise HddlUnsupported(f"{p}: cannot read the sidecar ({e.strerror or e})") from None
+    except tomllib.TOMLDecodeError as e:
+        raise HddlUnsupported(f"{p}: not TOML ({e})") from None
+    return _sidecar_from(data, str(p))
+
+
+def _sidecar_from(data: Mapping[str, Any], where: str, check: bool = True) -> Sidecar:
+    for table, value in data.items():
+        keys = _SIDECAR_KEYS.get(table)
+        if keys is None:
+            raise HddlUnsupported(f"{where}: unknown table [{table}]; use "
+                                  f"{', '.join(f'[{t}]' for t in _SIDECAR_KEYS)}")
+        bad = sorted(set(value) - keys) if table != "observability" else []
+        if bad:
+            raise HddlUnsupported(f"{where}: [{table}] has no key {bad[0]!r}; use "
+                                  f"{', '.join(sorted(keys))}")
+    s = Sidecar(source=where)
+    agents = data.get("agents", {})
+    s.robot, s.human = str(agents.get("robot", "R")), str(agents.get("human", "H"))
+    obs = dict(data.get("observability", {}))
+    s.default = str(obs.pop("default", "observable"))
+    s.when = {str(k): [str(x) for x in v] for k, v in obs.pop("when", {}).items()}
+    for cls in CLASSES:
+        for pred in obs.pop(cls, []) if isinstance(obs.get(cls), list) else []:
+            s.classes[str(pred)] = cls
+    for pred, cls in obs.items():  # predicate = "hidden"
+        s.classes[str(pred)] = str(cls)
+    s.copresence = [str(x) for x in data.get("copresence", {}).get("when", [])]
+    other = data.get("other", {})
+    s.other = str(other.get("model", "none"))
+    s.other_agenda = [str(x) for x in other.get("agenda", [])]
+    s.expects = str(other.get("expects", "plan"))
+    s.problem = dict(data.get("problem", {}))
+    s.limits = dict(data.get("limits", {}))
+    if check:
+        s.check()
+    return s
+
+
+_LIT = re.compile(r"^\s*(not\s+)?([A-Za-z_][\w\-]*)\s*(?:\((.*)\))?\s*$")
+_EQ = re.compile(r"^\s*(\??[\w\-]+)\s*(=|!=)\s*(\??[\w\-]+)\s*$")
+
+
+def literal(text: str, where: str) -> tuple[bool, str, list[str]]:
+    """``"at(?x, l1)"`` -> (True, "at", ["?x", "l1"]); ``"?p = a"`` -> (True, "=", [...])."""
+    e = _EQ.match(text)
+    if e:
+        return e.group(2) == "=", "=", [e.group(1), e.group(3)]
+    m = _LIT.match(text)
+    if not m:
+        raise HddlUnsupported(f"{where}: cannot read {text!r} as a literal (e.g. \"at(?x, l1)\", "
+                              "\"not busy\" or \"?p = l1\")")
+    args = [a.strip() for a in m.group(3).split(",")] if m.group(3) else []
+    return m.group(1) is None, m.group(2), args
+
+
+__all__ = ["AGENTS", "CLASSES", "Sidecar", "literal", "read_sidecar"]

@@ -1,0 +1,378 @@
+"""Draw a robot policy as Graphviz DOT / SVG or as an offline HTML explorer (``ehatp render``),
+also inline in a notebook.
+
+DOT is always available (built with the ``graphviz`` Python package, which needs no binary);
+SVG pipes that DOT through Graphviz's ``dot`` program. The policy is a graph
+(docs/policy-format.md) and is drawn as one: each node once, with an edge per move, so a node
+reached by several paths has several parents. Big policies are collapsed by :func:`plan_view`:
+distinct nodes with identical content all the way down are drawn once, and a depth cap and a
+node budget fold what is left into "… N more" stubs. The HTML explorer is one file: the
+template, CSS and JS under ``explorer/`` are inlined and the policy JSON embedded, so it works
+offline. :class:`Explorer` shows that page inline in a Jupyter notebook (``ehatp.explore``; a
+policy displays itself so once ``ehatp`` is imported in IPython). See ``docs/rendering.md`` and
+``docs/notebook.md``.
+
+Neither typer nor graphviz load with this module: the ``graphviz`` package when a drawing is
+made, the command line never (it is :mod:`ehatp.cli.render`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import re
+import shutil
+import subprocess
+from collections import deque
+from dataclasses import dataclass, field
+from enum import StrEnum
+from html import escape as html_escape
+from importlib import resources
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ..errors import DotMissing
+from .policy import COMM_KINDS, Policy, PolicyMove, PolicyNode
+from .policy_check import read_policy
+
+if TYPE_CHECKING:
+    import graphviz  # type: ignore[import-untyped]
+
+DEFAULT_MAX_NODES = 400  # more than this and a drawing stops being readable
+IDLE_KINDS = ("wait", "pass")
+INSTALL_DOT = ("--format svg needs Graphviz's `dot` program, which was not found; install "
+               "Graphviz (Debian/Ubuntu: apt-get install graphviz; macOS: brew install graphviz) "
+               "or use --format dot or --format html")
+
+
+class Format(StrEnum):
+    dot = "dot"
+    svg = "svg"
+    html = "html"
+
+
+# --------------------------------------------------------------------------- collapsing
+
+
+@dataclass
+class View:
+    """What to draw: policy node ids (a representative for merged identical subgraphs) and
+    moves as edges."""
+
+    nodes: list[int]  # drawn node ids, breadth-first
+    edges: list[tuple[int, int, int]]  # (from, to, index of the move in the from node's moves)
+    folded: dict[int, int] = field(default_factory=dict)  # drawn id -> nodes not drawn below
+    stands_for: dict[int, int] = field(default_factory=dict)  # drawn id -> its copies in the tree
+    notes: list[str] = field(default_factory=list)
+    # drawn id -> the moves into it, from anywhere in the policy (into the nodes it stands for)
+    entering: dict[int, list[PolicyMove]] = field(default_factory=dict)
+
+    @property
+    def collapsed(self) -> bool:
+        return bool(self.notes)
+
+
+def subgraph_hashes(policy: Policy) -> list[str]:
+    """A content hash per node covering everything below it (nodes and moves) except the ids,
+    children before parents: linear in the graph."""
+    out = [""] * len(policy.nodes)
+    for i in reversed(policy.topological_order()):
+        node = policy.nodes[i]
+        own = {k: v for k, v in node.to_dict().items() if k not in ("id", "moves")}
+        h = hashlib.sha256(json.dumps(own, sort_keys=True, default=str).encode())
+        for m in node.moves:
+            move = {k: v for k, v in m.to_dict().items() if k != "to"}
+            h.update(json.dumps(move, sort_keys=True, default=str).encode())
+            h.update(out[m.to].encode())
+        out[i] = h.hexdigest()
+    return out
+
+
+def _below(policy: Policy, canon: list[int], start: int, drawn: set[int]) -> int:
+    """Distinct (representative) nodes below ``start`` that are not drawn."""
+    seen: set[int] = set()
+    stack = [start]
+    while stack:
+        for m in policy.nodes[stack.pop()].moves:
+            k = canon[m.to]
+            if k not in seen and k not in drawn:
+                seen.add(k)
+                stack.append(k)
+    return len(seen)
+
+
+def plan_view(policy: Policy, *, max_depth: int | None = None,
+              max_nodes: int | None = DEFAULT_MAX_NODES, share: bool | None = None) -> View:
+    """Decide what to draw.
+
+    ``share`` None merges distinct nodes with identical subgraphs only when the policy is over
+    ``max_nodes``. Then a breadth-first walk draws nodes down to ``max_depth`` and while the
+    budget lasts; a node whose children do not all fit is drawn with a stub counting the nodes
+    folded below it (all children or none, so a human choice is never shown half-expanded).
+    """
+    total = len(policy.nodes)
+    if share is None:
+        share = max_nodes is not None and total > max_nodes
+    canon = list(range(total))
+    notes: list[str] = []
+    if share:
+        first: dict[str, int] = {}
+        for i, h in enumerate(subgraph_hashes(policy)):
+            canon[i] = first.setdefault(h, i)
+        if len(first) < total:
+            notes.append(f"identical subgraphs drawn once ({total} policy nodes, "
+                         f"{len(first)} distinct)")
+    copies: dict[int, int] = {}
+    for i, n in enumerate(policy.path_counts()):
+        copies[canon[i]] = copies.get(canon[i], 0) + n
+    depth = {0: 0}
+    order = [0]
+    edges: list[tuple[int, int, int]] = []
+    cut: list[int] = []
+    cut_depth = cut_budget = 0
+    queue = deque([0])
+    while queue:
+        i = queue.popleft()
+        kids = [canon[m.to] for m in policy.nodes[i].moves]
+        if not kids:
+            continue
+        new = list(dict.fromkeys(k for k in kids if k not in depth))
+        if max_depth is not None and depth[i] >= max_depth:
+            cut.append(i)
+            cut_depth += 1
+            continue
+        if max_nodes is not None and len(order) + len(new) > max_nodes:
+            cut.append(i)
+            cut_budget += 1
+            continue
+        edges.extend((i, k, j) for j, k in enumerate(kids))
+        for k in new:
+            depth[k] = depth[i] + 1
+            order.append(k)
+            queue.append(k)
+    drawn = set(order)
+    # a folded node may have children drawn through another parent: it still gets its stub
+    folded = {i: _below(policy, canon, i, drawn) for i in cut}
+    if cut_depth:
+        notes.append(f"cut at depth {max_depth} ({cut_depth} node(s) folded)")
+    if cut_budget:
+        notes.append(f"node budget {max_nodes} reached ({cut_budget} node(s) folded)")
+    stands_for = {i: copies[i] for i in order if copies.get(i, 1) > 1}
+    entering: dict[int, list[PolicyMove]] = {}
+    for _, m in policy.edges():
+        if canon[m.to] in drawn:
+            entering.setdefault(canon[m.to], []).append(m)
+    return View(order, edges, folded, stands_for, notes, entering)
+
+
+# --------------------------------------------------------------------------- DOT / SVG
+
+_ROBOT_STYLE = {"shape": "box", "style": "rounded,filled", "fillcolor": "#d6e6ff",
+                "color": "#1f4e99"}
+_HUMAN_STYLE = {"shape": "ellipse", "style": "filled", "fillcolor": "#ffe3bf",
+                "color": "#a35200"}
+_COMM_STYLE = {"shape": "hexagon", "style": "filled,bold", "fillcolor": "#fff27a",
+               "color": "#8a6d00", "penwidth": "2"}
+_START_STYLE = {"shape": "box", "style": "rounded,filled,bold", "fillcolor": "#e6e6e6",
+                "color": "#333333"}
+
+
+def _dot_text(s: str) -> str:
+    # the graphviz package quotes values but leaves backslashes for dot to interpret
+    return s.replace("\\", "\\\\")
+
+
+def worlds_text(n: PolicyNode) -> str:
+    return f"{n.worlds} world" + ("" if n.worlds == 1 else "s")
+
+
+def k_text(policy: Policy, n: PolicyNode) -> str:
+    """The K-counter against the bound: ``k=1/2`` is one robot turn unseen of K = 2."""
+    return f"k={n.k}/{policy.K}"
+
+
+def entry_move(moves: list[PolicyMove]) -> PolicyMove | None:
+    """The move a node is drawn with: the one every path takes into it, or None when they
+    differ (then each edge is labelled with its own move)."""
+    if not moves:
+        return None
+    first = moves[0]
+    same = all((m.agent, m.kind, m.action) == (first.agent, first.kind, first.action)
+               for m in moves)
+    return first if same else None
+
+
+def node_attrs(policy: Policy, n: PolicyNode, entered: list[PolicyMove],
+               copies: int = 1) -> dict[str, str]:
+    """Shape, colours, label and tooltip of one drawn policy node, reached by the moves
+    ``entered`` (none at the root)."""
+    move = entry_move(entered)
+    agent = entered[0].agent if entered else None
+    kinds = {m.kind for m in entered}
+    kind = kinds.pop() if len(kinds) == 1 else None  # styled by the moves' kind, if one
+    human = agent == policy.agents["human"]
+    if n.id == 0:
+        attrs = dict(_START_STYLE)
+    elif kind in COMM_KINDS:
+        attrs = dict(_COMM_STYLE)
+    else:
+        attrs = dict(_HUMAN_STYLE if human else _ROBOT_STYLE)
+        if kind in IDLE_KINDS:
+            attrs["style"] += ",dashed"
+            attrs["fillcolor"] = "#f3f3f3"
+    if n.id == 0:
+        head = "start"
+    elif move is None:  # reached by different moves: each labels its edge
+        head = f"{agent}: one of {len(entered)} moves (on the edges)"
+    else:
+        head = f"{move.agent}: {move.action}"
+    info = [worlds_text(n), k_text(policy, n)]
+    if not n.copresent:
+        info.append("apart")
+    lines = [head, " · ".join(info)]
+    if n.goal:
+        attrs["peripheries"] = "2"
+        attrs["color"] = "#2e7d32"
+        lines.append("goal")
+    if copies > 1:
+        lines.append(f"(×{copies})")
+    attrs["label"] = "\\n".join(_dot_text(x) for x in lines)
+    cost = "" if move is None and n.id else f"cost {0 if move is None else move.cost}, "
+    attrs["tooltip"] = _dot_text(
+        f"node {n.id}: {cost}cost to go {n.value}, "
+        f"{'together' if n.copresent else 'apart'}; true: {', '.join(n.state)}")
+    attrs["id"] = f"policy_node_{n.id}"  # Graphviz escapes "-" in SVG ids
+    return attrs
+
+
+def to_dot(policy: Policy, view: View | None = None) -> graphviz.Digraph:
+    """The policy (or the part ``view`` keeps) as a Graphviz digraph: one node per policy node,
+    one edge per move."""
+    import graphviz
+
+    view = view or plan_view(policy, max_nodes=None, share=False)
+    kind = "expected" if policy.objective.get("kind") == "expected" else "worst-case"
+    title = (f"{policy.problem} ({policy.domain}): {kind} cost {policy.cost}, "
+             f"{policy.leaves} branches, {policy.communications} communication(s); "
+             f"{len(policy.nodes)} nodes")
+    label = "\\l".join(_dot_text(x) for x in [title, *(f"collapsed: {t}" for t in view.notes)])
+    g = graphviz.Digraph(name=re.sub(r"\W", "_", policy.problem) or "policy")
+    g.attr(rankdir="TB", labelloc="t", labeljust="l", label=label + "\\l",
+           fontname="Helvetica", fontsize="12")
+    g.attr("node", fontname="Helvetica", fontsize="10", margin="0.08,0.04")
+    g.attr("edge", color="#666666", arrowsize="0.6", fontname="Helvetica", fontsize="9")
+    into = view.entering
+    for i in view.nodes:
+        g.node(f"n{i}", **node_attrs(policy, policy.nodes[i], into.get(i, []),
+                                     view.stands_for.get(i, 1)))
+        if i in view.folded:
+            g.node(f"more{i}", label=f"… {view.folded[i]} more", shape="note",
+                   style="dashed", color="#888888", fontcolor="#555555")
+            g.edge(f"n{i}", f"more{i}", style="dashed", color="#888888")
+    human = policy.agents["human"]
+    for a, b, j in view.edges:
+        m = policy.nodes[a].moves[j]
+        attrs: dict[str, str] = {}
+        if m.agent == human:  # human moves are the uncontrollable branches: dashed, orange
+            attrs.update(style="dashed", color="#a35200")
+        if entry_move(into.get(b, [])) is None:
+            attrs["label"] = _dot_text(m.action)
+        g.edge(f"n{a}", f"n{b}", **attrs)
+    return g
+
+
+def to_svg(dot: graphviz.Digraph) -> str:
+    """Lay out with Graphviz's ``dot``; :class:`DotMissing` when it is not installed."""
+    import graphviz
+
+    if shutil.which("dot") is None:
+        raise DotMissing(INSTALL_DOT)
+    try:
+        return str(dot.pipe(format="svg", encoding="utf-8"))
+    except graphviz.ExecutableNotFound:
+        raise DotMissing(INSTALL_DOT) from None
+    except (subprocess.CalledProcessError, RuntimeError) as e:
+        raise RuntimeError(f"Graphviz's dot failed: {e}") from None
+
+
+# --------------------------------------------------------------------------- HTML
+
+_TOKEN = re.compile(r"\{\{(\w+)\}\}")
+
+
+def _asset(name: str) -> str:
+    return (resources.files("ehatp.formats") / "explorer" / name).read_text(encoding="utf-8")
+
+
+def _script_json(data: Any) -> str:
+    # safe inside <script>: no "</script", no "<!--"; escaping "/" also keeps any URL-looking
+    # string in the data from appearing literally in the page
+    text = json.dumps(data, separators=(",", ":"), ensure_ascii=False, default=str)
+    for ch, esc in (("<", "\\u003c"), (">", "\\u003e"), ("&", "\\u0026"), ("/", "\\/"),
+                    ("\u2028", "\\u2028"), ("\u2029", "\\u2029")):
+        text = text.replace(ch, esc)
+    # letters only occur inside JSON strings, so this colon is always a string character
+    return re.sub(r"(?i)(https?):", r"\1\\u003a", text)
+
+
+def to_html(policy: Policy, *, max_depth: int | None = None,
+            max_nodes: int | None = DEFAULT_MAX_NODES) -> str:
+    """The self-contained explorer page; depth cap and budget only set what starts folded."""
+    data = policy.to_dict()
+    config = {"maxDepth": max_depth, "maxNodes": max_nodes}
+    parts = {
+        # entities for ":" and "/" keep a URL-like problem name from reading as a link
+        "title": html_escape(f"{policy.problem} — ehatp policy").replace(":", "&#58;")
+        .replace("/", "&#47;"),
+        "css": _asset("explorer.css"),
+        "js": _asset("explorer.js"),
+        "policy_json": _script_json(data),
+        "config_json": _script_json(config),
+    }
+    # one pass so that nothing inserted is scanned for tokens again
+    return _TOKEN.sub(lambda m: parts[m.group(1)], _asset("explorer.html"))
+
+
+# --------------------------------------------------------------------------- any format
+
+
+def render(path: str | Path | Policy, fmt: Format = Format.dot, *, max_depth: int | None = None,
+           max_nodes: int | None = DEFAULT_MAX_NODES,
+           share: bool | None = None) -> tuple[str, list[str]]:
+    """The rendered text and the collapse notes (empty when drawn whole). A path is read
+    with its structure checked (:func:`~ehatp.formats.policy_check.read_policy`)."""
+    policy = path if isinstance(path, Policy) else read_policy(path)
+    if fmt is Format.html:
+        return to_html(policy, max_depth=max_depth, max_nodes=max_nodes), []
+    view = plan_view(policy, max_depth=max_depth, max_nodes=max_nodes, share=share)
+    dot = to_dot(policy, view)
+    return (dot.source if fmt is Format.dot else to_svg(dot)), view.notes
+
+
+# --------------------------------------------------------------------------- notebooks
+
+
+def notebook_html(policy: Policy) -> str:
+    """The offline explorer (``ehatp render --format html``) inline in a Jupyter notebook: the
+    page in a sandboxed ``<iframe srcdoc>``, so that its styles and scripts stay out of the
+    notebook's. See ``docs/notebook.md``."""
+    page = html_escape(to_html(policy), quote=True)
+    return (f'<iframe srcdoc="{page}" sandbox="allow-scripts" title="ehatp policy '
+            f'{html_escape(policy.problem, quote=True)}" style="width: 100%; height: 640px; '
+            'border: 1px solid #ccc;"></iframe>')
+
+
+class Explorer:
+    """A policy as notebooks show it: the explorer (:func:`notebook_html`). ``ehatp.explore``
+    returns one; Jupyter displays it wherever a cell shows it."""
+
+    def __init__(self, policy: Policy) -> None:
+        self.policy = policy
+
+    def _repr_html_(self) -> str:
+        return notebook_html(self.policy)
+
+
+__all__ = ["DEFAULT_MAX_NODES", "INSTALL_DOT", "DotMissing", "Explorer", "Format", "View",
+           "entry_move", "k_text", "node_attrs", "notebook_html", "plan_view", "render",
+           "subgraph_hashes", "to_dot", "to_html", "to_svg", "worlds_text"]

@@ -1,0 +1,706 @@
+"""Drive one execution of a robot policy, step by step, for a robot controller or a simulator.
+
+:class:`Executor` walks the policy graph, move by move, while it tracks the epistemic state with the
+:class:`~ehatp.epistemic.semantics.Semantics` of the problem, so both views are checked against
+each other at every step. The robot asks :meth:`Executor.next_robot_action`, does it, and reports
+it with :meth:`Executor.robot_action_done`; what the human does is reported with
+:meth:`Executor.observe_human_action`, which raises :class:`UncoveredHumanAction` when the
+policy has no branch for it. A problem's fixed opening (``[problem] after``) is replayed first,
+as moves the executor expects (or at once, as moves already made: :meth:`Executor.replay_opening`).
+
+The executor moves along the policy's recorded edges: where several moves share the label the
+policy names (two robot methods that start with the same action), it takes the one whose result
+is the node the edge leads to (:meth:`Executor.edge_move`), never merely the first.
+
+When the human leaves the policy, :meth:`Executor.as_problem` states the execution so far as a new
+problem and :meth:`Executor.replan` plans from where the robot is and follows the new policy. See
+``docs/simulation.md`` and ``docs/execution.md``.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from ..epistemic.semantics import (
+    ACTION,
+    ANNOUNCE,
+    ANSWER,
+    ASK,
+    INFORM,
+    PASS,
+    WAIT,
+    Move,
+    Semantics,
+    bits_of,
+)
+from ..epistemic.state import HUMAN, ROBOT, EState, Worlds, states_of
+from ..errors import (
+    ExecutionError,
+    InputError,
+    PolicyMismatch,
+    UncoveredHumanAction,
+)
+from ..formats.policy import Policy, PolicyMove, PolicyNode
+from ..model.formula import conj
+from ..model.grounding import Grounded, ground_problem
+from ..model.htn import Agenda
+from ..model.problem import Cost, Problem
+
+if TYPE_CHECKING:
+    from ..search.planner import Result
+
+MAX_WORLDS_LISTED = 8
+
+
+@dataclass(frozen=True)
+class Action:
+    """One move in the domain's vocabulary. ``name``/``args`` split an operator call
+    (``place``, ``("w", "box2")``); for ``inform`` the args are the literals told, for ``ask``
+    the question; ``wait`` and ``pass`` have none. ``told`` holds the literals the robot says
+    while doing an action or a wait (``speech = "with-action"``: ``inform(x) + place(r, b)``)."""
+
+    agent: str
+    kind: str  # action | wait | pass | inform | ask | silence | answer | announce
+    label: str
+    name: str
+    args: tuple[str, ...]
+    cost: Cost
+    told: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class WorldView:
+    """One world the human entertains: its true atoms, how it differs from the truth, and the
+    agenda the human attributes to the robot there."""
+
+    atoms: tuple[str, ...]
+    true: tuple[str, ...]  # true here, false in reality
+    false: tuple[str, ...]  # false here, true in reality
+    robot_agenda: tuple[str, ...]
+
+    @property
+    def is_truth(self) -> bool:
+        return not self.true and not self.false
+
+
+@dataclass(frozen=True)
+class Step:
+    """One executed move: the states around it and the policy node it reached (None within
+    the opening). ``assessed`` holds the human's worlds just before situation assessment, when
+    it ran on this step. ``replanned`` marks a human move the policy did not cover, after which
+    the execution follows a new policy (:meth:`Executor.replan`); ``node`` is that policy's
+    root. ``trace`` is the move as a problem's fixed opening names it, when that is not its
+    label: ``fetch [shelve]`` where robot moves share a label (:meth:`Semantics.trace_label`,
+    read back by :meth:`Executor.as_problem`'s problem)."""
+
+    index: int
+    action: Action
+    before: EState
+    after: EState
+    node: PolicyNode | None
+    opening: bool
+    assessed: Worlds | None
+    replanned: bool = False
+    trace: str = ""
+
+    @property
+    def played(self) -> str:
+        """The step as an opening step (``[problem] after``): the agent, then the move."""
+        return f"{self.action.agent} {self.trace or self.action.label}"
+
+
+class _TracingSemantics(Semantics):
+    """The problem's semantics, remembering what situation assessment received, so a step can
+    say which worlds the human ruled out by looking."""
+
+    def __init__(self, g: Grounded) -> None:
+        super().__init__(g)
+        self.seen: dict[tuple[int, Worlds], Worlds] = {}
+
+    def assess(self, t: int, worlds: Worlds) -> Worlds:
+        out = super().assess(t, worlds)
+        self.seen.setdefault((t, out), worlds)
+        return out
+
+
+def _norm(label: str) -> str:
+    return "".join(label.split())
+
+
+def human_agendas(es: EState) -> tuple[Agenda, ...]:
+    """Return the human agendas the robot cannot tell apart at ``es`` (docs/semantics.md §3,
+    "What the robot observes"): the one place the executor reads them."""
+    return es.human_agendas
+
+
+class Executor:
+    """Follow ``policy`` (solved from ``problem`` when None) through one execution."""
+
+    def __init__(self, problem: Problem, policy: Policy | None = None) -> None:
+        if policy is None:
+            from ..search.planner import solve
+
+            result = solve(problem)
+            if result.policy is None:
+                raise ExecutionError(f"{problem.source}: no policy to execute: "
+                                     f"{result.reason or result.status}")
+            policy = result.policy
+        if tuple(policy.after) != tuple(problem.after):
+            raise PolicyMismatch(f"the policy was planned after the opening {list(policy.after)}"
+                                 f" but the problem's opening is {list(problem.after)}; "
+                                 "solve this problem again")
+        self.problem = problem
+        self.policy = policy
+        self.grounded = ground_problem(problem)
+        self.sem = _TracingSemantics(self.grounded)
+        self.robot_name, self.human_name = self.sem.names
+        self.state: EState = self.sem.initial()
+        self.initial_assessed = self.sem.seen.get((self.state.true, self.state.worlds))
+        self.history: list[Step] = []
+        self._opening = list(policy.after)
+        self.node: PolicyNode | None = None
+        self._moves_at: tuple[EState, list[Move]] | None = None  # the last state's moves
+        if not self._opening:
+            self._enter_policy()
+
+    # -- where we are ---------------------------------------------------------------------------
+    @property
+    def in_opening(self) -> bool:
+        """True while the problem's fixed opening is being replayed."""
+        return self.node is None
+
+    @property
+    def done(self) -> bool:
+        """The policy has reached one of its leaves (a goal)."""
+        return self.node is not None and not self.node.moves
+
+    @property
+    def goal_reached(self) -> bool:
+        return self.sem.is_goal(self.state)
+
+    @property
+    def to_move(self) -> str | None:
+        """The name of the agent to move, None when done."""
+        if self.done:
+            return None
+        return self.robot_name if self.state.turn == ROBOT else self.human_name
+
+    @property
+    def cost(self) -> Cost:
+        """Cost of the moves executed so far, the opening included."""
+        return sum((s.action.cost for s in self.history), 0)
+
+    # -- the robot ------------------------------------------------------------------------------
+    def next_robot_action(self) -> Action | None:
+        """What the robot must do now; None when it is the human's turn or the task is done."""
+        if self.done or self.state.turn != ROBOT:
+            return None
+        return self._action(self._robot_move()[0])
+
+    def robot_action_done(self, label: str | None = None) -> Step:
+        """Record that the robot did its action (``label``, when given, is checked)."""
+        if self.done or self.state.turn != ROBOT:
+            raise ExecutionError(f"it is not {self.robot_name}'s turn: "
+                                 + ("the task is done" if self.done
+                                    else f"{self.human_name} is to move"))
+        move, edge = self._robot_move()
+        if label is not None and _norm(self.strip_agent(label)) != _norm(move.label):
+            raise ExecutionError(f"{self.robot_name} reports {label!r} but the policy says "
+                                 f"{move.label}")
+        return self._advance(move, edge)
+
+    # -- the human ------------------------------------------------------------------------------
+    def possible_human_moves(self) -> list[Move]:
+        """Every move the human model allows now (the semantics' view), policy or not."""
+        if self.done or self.state.turn != HUMAN:
+            return []
+        return self._moves()
+
+    def legal_human_moves(self) -> list[Move]:
+        """Return every move the human can make now: the model's options
+        (:meth:`possible_human_moves`) and a ``pass`` the fairness rule leaves out after a
+        forced robot wait (docs/semantics.md §4: such a pass *need not be covered*, which does
+        not make it impossible; a human who does it leaves the policy, and ``execute --replan``
+        plans again from there)."""
+        moves = self.possible_human_moves()
+        if moves and self.state.forced and not any(m.kind == PASS for m in moves):
+            moves = moves + [m for m in self.sem.moves(self.state._replace(forced=False))
+                             if m.kind == PASS]
+        return moves
+
+    def expected_human_actions(self) -> list[Action]:
+        """The human moves the policy covers now (empty at the robot's turn or when done)."""
+        if self.done or self.state.turn != HUMAN:
+            return []
+        if self.node is None:
+            return [self._action(self._follow(self._opening[0]))]
+        return [self._action(self.edge_move(self.node, pm)) for pm in self.node.moves]
+
+    def observe_human_action(self, action: str | Action) -> Step:
+        """Record what the human did (a label such as ``place(w, box2)``, ``ask(...)``,
+        ``pass``; the human's name may lead). The policy is followed along the edge the policy
+        recorded for that label (:meth:`edge_move`). Raises :class:`UncoveredHumanAction` when
+        the policy has no branch for it (nothing changes then): its ``reason`` says whether
+        the move is not one of the human's here, fails, or is legal but not covered."""
+        if self.done or self.state.turn != HUMAN:
+            raise ExecutionError(f"it is not {self.human_name}'s turn: "
+                                 + ("the task is done" if self.done
+                                    else f"{self.robot_name} is to move"))
+        label = action.label if isinstance(action, Action) else self.strip_agent(action)
+        move, edge = self._human_move(label)
+        return self._advance(move, edge)
+
+    def copy(self) -> Executor:
+        """An independent executor at the same point of the same execution, without grounding
+        the problem again (e.g. to run many executions from one start)."""
+        other = copy.copy(self)
+        other.sem = copy.copy(self.sem)  # its memo tables are shared: they are pure
+        other.sem.seen = dict(self.sem.seen)  # what assessment saw of the moves computed now
+        other.history, other._opening = list(self.history), list(self._opening)
+        return other
+
+    # -- the opening, and leaving the policy ----------------------------------------------------
+    def replay_opening(self) -> list[Step]:
+        """Play what is left of the problem's fixed opening at once, as moves already made (the
+        problem says the policy starts after them), instead of expecting them one by one;
+        returns their steps. Nothing happens when there is no opening left."""
+        steps = []
+        while self.node is None:
+            steps.append(self._advance(self._follow(self._opening[0]), None))
+        return steps
+
+    def as_problem(self) -> Problem:
+        """The execution so far as a new problem: the same problem whose fixed opening
+        (``[problem] after``) is every move played so far, then what is left of the original
+        opening. Solving it plans from where the execution is now.
+
+        Why the history and not the current epistemic state as a new start: a problem's start
+        cannot say all that the rules read in a state -- the K counter, the count of passive
+        moves, a forced wait, agendas part-way through a method, the speech opening -- and a new
+        start is assessed again (``Semantics.initial``). Replaying the moves through the same
+        semantics gives exactly the tracked state (:meth:`replan` checks the new policy's root
+        against it); the cost is a replay of the moves, linear in the history."""
+        played = tuple(s.played for s in self.history)
+        desc = self.problem.description
+        return dataclasses.replace(
+            self.problem, after=played + tuple(self._opening), notes=(),
+            description=(f"{desc}; " if desc else "") + f"replanned after {len(played)} moves")
+
+    def replan(self, action: str | Action | None = None, **solve_options: Any) -> Result:
+        """Plan again from where the execution is, and follow the new policy from its root.
+
+        ``action``, when given, is a human move the human can make now
+        (:meth:`legal_human_moves`: the model's options, and a pass the fairness rule lets a
+        policy leave out) that the policy may not cover: it is applied to the tracked state
+        first (a step marked ``replanned``). Then :meth:`as_problem` is solved
+        (``solve_options`` go to :func:`ehatp.solve`) and its policy replaces :attr:`policy`
+        and :attr:`problem`. Raises :class:`UncoveredHumanAction` when ``action`` is not a move
+        of the human here or fails, and :class:`ExecutionError` when no policy is found; nothing
+        changes then (also when the planner cannot replay the execution: an
+        :class:`UncoveredHumanAction` after ``action``). Returns the solver's result."""
+        from ..search.planner import solve
+
+        move: Move | None = None
+        if action is not None:
+            if self.done or self.state.turn != HUMAN:
+                raise ExecutionError(f"it is not {self.human_name}'s turn: "
+                                     + ("the task is done" if self.done
+                                        else f"{self.robot_name} is to move"))
+            label = action.label if isinstance(action, Action) else self.strip_agent(action)
+            move = self._legal_move(label)
+        problem = self.as_problem()
+        if move is not None:  # played after the history; the rest of the opening is dropped
+            problem = dataclasses.replace(problem, after=tuple(
+                s.played for s in self.history) + (f"{self.human_name} {move.label}",))
+        try:
+            result = solve(problem, **solve_options)
+        except InputError as e:  # the planner cannot replay the execution as an opening
+            why = (f"the planner cannot plan after it: it does not replay the execution "
+                   f"({e.problem})")
+            if move is None:
+                raise ExecutionError(f"no policy from here: {why}") from None
+            raise UncoveredHumanAction(
+                move.label, [a.label for a in self.expected_human_actions()],
+                [m.label for m in self.legal_human_moves()],
+                f"{self.human_name} did {move.label}, which the policy does not cover, and "
+                + why) from None
+        if result.policy is None:
+            raise ExecutionError(f"no policy from here: {result.reason or result.status}")
+        if move is None and self.node is None:  # within the opening: the policy follows it
+            self.problem, self.policy = problem, result.policy
+            return result
+        before, assessed = self.state, None
+        if move is not None:
+            assert move.child is not None
+            assessed = self.sem.seen.get((move.child.true, move.child.worlds))
+            self.state = move.child
+        root = result.policy.root
+        try:
+            self._check(root)
+        except PolicyMismatch:
+            self.state = before
+            raise
+        self._forget()
+        self.problem, self.policy, self.node, self._opening = problem, result.policy, root, []
+        if move is not None:
+            self.history.append(Step(len(self.history) + 1, self._action(move, before.true),
+                                     before, self.state, root, False,
+                                     assessed if assessed != self.state.worlds else None,
+                                     replanned=True))
+        return result
+
+    # -- what the human believes ------------------------------------------------------------------
+    def human_worlds(self) -> list[WorldView]:
+        """The worlds the human entertains now, in the domain's vocabulary."""
+        g, t = self.grounded, self.state.true
+        return [WorldView(tuple(g.state_atoms(s)), tuple(g.mask_atoms(s & ~t)),
+                          tuple(g.mask_atoms(t & ~s)), tuple(self._agenda(ag)))
+                for s, ag in self.state.worlds]
+
+    def uncertain_atoms(self) -> list[str]:
+        """The atoms on which the human's worlds disagree."""
+        states = states_of(self.state.worlds)
+        m = 0
+        for s in states:
+            m |= s ^ states[0]
+        return self.grounded.mask_atoms(m)
+
+    def truth(self) -> list[str]:
+        """The atoms true now (the robot knows them)."""
+        return self.grounded.state_atoms(self.state.true)
+
+    def explain(self, step: Step) -> list[str]:
+        """What ``step`` changed, in the domain's vocabulary: the truth, co-presence, and how the
+        human's worlds were added, ruled out or told."""
+        g, sem = self.grounded, self.sem
+        R, H = self.robot_name, self.human_name
+        b, a, act = step.before, step.after, step.action
+        lines: list[str] = []
+        gained, lost = g.mask_atoms(a.true & ~b.true), g.mask_atoms(b.true & ~a.true)
+        if gained or lost:
+            parts = ([f"now true: {', '.join(gained)}"] if gained else []) + (
+                [f"no longer true: {', '.join(lost)}"] if lost else [])
+            lines.append("; ".join(parts))
+        n0 = len(b.worlds)
+        mid = step.assessed if step.assessed is not None else a.worlds
+        cop = sem.copresent(b.true)
+        if act.agent == R and act.kind in (ACTION, WAIT) and not cop:
+            if act.kind == ACTION or b.k < sem.K:
+                lines.append(f"{H} did not see it: imagining what {R} may have done meanwhile, "
+                             f"{H} goes from {n0} to {_worlds(len(mid))}")
+            else:
+                lines.append(f"{H} did not see it and imagines nothing more "
+                             f"({R} has had its K={sem.K} unseen turns)")
+        elif act.agent == R and act.kind == ACTION and len(mid) != n0:
+            lines.append(f"{H} saw it: {n0} -> {_worlds(len(mid))}")
+        elif act.kind == INFORM:
+            lines.append(f"{R} tells {H}: {', '.join(act.args)} ({n0} -> {_worlds(len(mid))})")
+        elif act.kind == ASK and act.agent == R:
+            lines.append(f"{R} asks {H} what {H} is about to do")
+        elif act.kind == ANSWER:
+            lines.append(f"{H} answers {R}: " + (", ".join(self._agenda(human_agendas(a)[0]))
+                                                 or "nothing more to do")
+                         + f"; {R} now knows {H}'s intention")
+        elif act.kind == ANNOUNCE:
+            lines.append(f"{R} tells {H} what it is doing: "
+                         + (", ".join(self._agenda(b.robot_agenda)) or "nothing more")
+                         + f" ({n0} -> {_worlds(len(mid))})")
+        elif act.kind == ASK:
+            answer = self.answer(b, act.label)
+            said = "" if answer is None else f"; {R} answers {'yes' if answer else 'no'}"
+            lines.append(f"{H} asks whether {act.args[0]}{said} ({n0} -> {_worlds(len(mid))})")
+        if step.assessed is not None and step.assessed != a.worlds:
+            lines.append(self._assessment(a.true, step.assessed, a.worlds))
+        if sem.copresent(a.true) != cop:
+            lines.append(f"{H} and {R} are now " + ("together" if sem.copresent(a.true)
+                                                     else "apart"))
+        if not sem.copresent(a.true) and a.k != b.k:
+            lines.append(f"{R} has had {a.k} of its K={sem.K} turns unseen by {H}")
+        lines.extend(self.belief_lines(a))
+        return lines
+
+    def start_lines(self) -> list[str]:
+        """The situation before the first move."""
+        es, sem = self.state, self.sem
+        R, H = self.robot_name, self.human_name
+        lines = [f"{H} and {R} are " + ("together" if sem.copresent(es.true) else "apart")]
+        if self.initial_assessed is not None and self.initial_assessed != es.worlds:
+            lines.append(self._assessment(es.true, self.initial_assessed, es.worlds))
+        return lines + self.belief_lines(es)
+
+    def belief_lines(self, es: EState | None = None) -> list[str]:
+        """What each agent believes in ``es`` (default: now)."""
+        es = self.state if es is None else es
+        R, H = self.robot_name, self.human_name
+        hyps = human_agendas(es)
+        intentions = [] if len(hyps) < 2 else [  # what the robot cannot see (§3)
+            f"{R} cannot tell which of {len(hyps)} intentions {H} follows: "
+            + " / ".join(", ".join(self._agenda(h)) or "nothing" for h in hyps)]
+        return self._world_lines(es) + intentions
+
+    def _world_lines(self, es: EState) -> list[str]:
+        g, t = self.grounded, es.true
+        R, H = self.robot_name, self.human_name
+        ws = es.worlds
+        head = f"{R} knows the truth; {H} now entertains {_worlds(len(ws))}"
+        if len(ws) == 1 and ws[0][0] == t and ws[0][1] == es.robot_agenda:
+            return [head + ": the truth"]
+        states = states_of(ws)
+        m = 0
+        for s in states:
+            m |= s ^ states[0]
+        differ = g.mask_atoms(m)
+        if len({ag for _, ag in ws}) > 1:
+            differ.append(f"{R}'s agenda")
+        if differ:
+            head += f"; they differ on {', '.join(differ)}"
+        if all(s != t for s in states):
+            head += "; none of them is the truth"
+        lines = [head + ":"]
+        for i, (s, ag) in enumerate(ws[:MAX_WORLDS_LISTED], 1):
+            lits = g.mask_atoms(s & ~t) + [f"not {x}" for x in g.mask_atoms(t & ~s)]
+            text = f"differs from the truth: {', '.join(lits)}" if lits else "the true state"
+            if ag != es.robot_agenda:
+                text += f"; {H} thinks {R} still has to do: " + (
+                    ", ".join(self._agenda(ag)) or "nothing")
+            lines.append(f"  world {i}: {text}")
+        if len(ws) > MAX_WORLDS_LISTED:
+            lines.append(f"  ... and {len(ws) - MAX_WORLDS_LISTED} more")
+        return lines
+
+    # -- following the policy's edges ----------------------------------------------------------
+    def edge_move(self, node: PolicyNode, edge: PolicyMove, es: EState | None = None) -> Move:
+        """Return the move of the semantics at ``es`` (default: the state now) that is the
+        policy's recorded ``edge`` out of ``node``: among the moves labelled ``edge.action``
+        -- several, when two robot methods start with the same action (docs/semantics.md §4)
+        -- the one whose child is the state the policy records at node ``edge.to``
+        (:meth:`differences`), never merely the first with that label. Raises
+        :class:`PolicyMismatch` when there is none: the policy does not fit the problem."""
+        want = _norm(edge.action)
+        same = [m for m in self._moves(es) if _norm(m.label) == want]
+        to = self.policy.nodes[edge.to]
+        fit = [m for m in same if m.child is not None and not self.differences(m.child, to)]
+        if len(fit) > 1:  # equal on what the node records in short: its worlds decide
+            fit = [m for m in fit if m.child is not None
+                   and self._world_diffs(m.child) == to.world_diffs] or fit
+        if fit:
+            return fit[0]
+        who = edge.agent
+        if not same:
+            raise PolicyMismatch(f"policy node {node.id} says {who} {edge.action}, which is not "
+                                 f"a move of {who} here; the policy does not fit this problem")
+        why = sorted({d for m in same if m.child is not None
+                      for d in self.differences(m.child, to)}) or ["it fails"]
+        raise PolicyMismatch(f"policy node {node.id} says {who} {edge.action} to node "
+                             f"{edge.to}, but no move {edge.action} here leads to that node "
+                             f"(they differ on {', '.join(why)}); the policy does not fit this "
+                             "problem")
+
+    def differences(self, es: EState, node: PolicyNode) -> list[str]:
+        """Return what policy node ``node`` records differently from the epistemic state
+        ``es`` (empty when it is ``es``'s node): the agent to move, the K-counter, the number
+        of worlds, the robot's agenda, the human agendas the robot cannot tell apart
+        (docs/semantics.md §3) and the true state."""
+        out = []
+        if node.to_move is not None and node.to_move != self.sem.names[es.turn]:
+            out.append("to_move")
+        if es.k != node.k:
+            out.append("k")
+        if len(es.worlds) != node.worlds:
+            out.append("worlds")
+        if self._agenda(es.robot_agenda) != node.robot_agenda:
+            out.append("robot_agenda")
+        if sorted(self._agenda(a) for a in human_agendas(es)) != sorted(node.human_agendas):
+            out.append("human_agendas")
+        if self.grounded.state_atoms(es.true) != node.state:
+            out.append("state")
+        return out
+
+    # -- internals ------------------------------------------------------------------------------
+    def strip_agent(self, label: str) -> str:
+        """Drop a leading agent name (``H place(w, box2)`` -> ``place(w, box2)``)."""
+        head, _, rest = label.strip().partition(" ")
+        return rest.strip() if rest and head in (self.robot_name, self.human_name) else label
+
+    def _moves(self, es: EState | None = None) -> list[Move]:
+        """The semantics' moves at ``es`` (default: now), kept for the last state asked."""
+        es = self.state if es is None else es
+        if self._moves_at is None or self._moves_at[0] is not es:
+            self._moves_at = (es, self.sem.moves(es))
+        return self._moves_at[1]
+
+    def _forget(self) -> None:
+        """Forget what the semantics computed for the previous state."""
+        self.sem.seen.clear()
+        self._moves_at = None
+
+    def _world_diffs(self, es: EState) -> list[dict[str, list[str]]]:
+        t = es.true
+        return [self.grounded.world_diff(s, t) for s in states_of(es.worlds)]
+
+    def _follow(self, label: str) -> Move:
+        try:
+            return self.sem.follow(self.state, label)
+        except ValueError as e:
+            raise PolicyMismatch(f"the problem's opening step {label!r} cannot be played: {e}"
+                                 ) from None
+
+    def _robot_move(self) -> tuple[Move, PolicyMove | None]:
+        """The robot's move now and the policy's edge it follows (None within the opening)."""
+        if self.node is None:
+            return self._follow(self._opening[0]), None
+        moves = self.node.moves
+        if len(moves) != 1:
+            raise PolicyMismatch(f"policy node {self.node.id} is a robot node with "
+                                 f"{len(moves)} moves, not 1")
+        return self.edge_move(self.node, moves[0]), moves[0]
+
+    def _legal_move(self, label: str) -> Move:
+        """The human's move ``label`` among :meth:`legal_human_moves`; raises
+        :class:`UncoveredHumanAction` when it is none of them or fails (a false belief)."""
+        want, who = _norm(label), self.human_name
+        legal = self.legal_human_moves()
+        same = [m for m in legal if _norm(m.label) == want]
+        move = next((m for m in same if m.child is not None), None)
+        if move is None:
+            possible = [m.label for m in legal]
+            expected = [a.label for a in self.expected_human_actions()]
+            if not same:
+                raise UncoveredHumanAction(label, expected, possible,
+                                           f"{who} did {label}, which is not a move of {who} "
+                                           f"here (the model allows {', '.join(possible)})")
+            raise UncoveredHumanAction(same[0].label, expected, possible,
+                                       f"{who} did {same[0].label}, which fails: "
+                                       f"{same[0].failure}")
+        return move
+
+    def _human_move(self, label: str) -> tuple[Move, PolicyMove | None]:
+        """The human's move ``label`` along the policy's edge for it (None within the
+        opening); raises :class:`UncoveredHumanAction` when the policy does not cover it."""
+        move = self._legal_move(label)
+        want = _norm(move.label)
+        if self.node is None:
+            opening = self._follow(self._opening[0])
+            if _norm(opening.label) == want:
+                return opening, None
+            where = "the problem's fixed opening"
+        else:
+            edge = next((pm for pm in self.node.moves if _norm(pm.action) == want), None)
+            if edge is not None:
+                return self.edge_move(self.node, edge), edge
+            where = f"policy node {self.node.id}"
+        who = self.human_name
+        legal = self.legal_human_moves()
+        aside = ("" if any(m is move for m in self._moves()) else
+                 " (a policy need not: after a forced robot wait, docs/semantics.md §4)")
+        raise UncoveredHumanAction(move.label, [a.label for a in self.expected_human_actions()],
+                                   [m.label for m in legal],
+                                   f"{who} did {move.label}, which {where} does not cover{aside}")
+
+    def _advance(self, move: Move, edge: PolicyMove | None) -> Step:
+        """Play ``move``: the tracked state becomes its child and, past the opening, the
+        policy moves to the node of ``edge``, the edge actually taken."""
+        assert move.child is not None
+        before = self.state
+        trace = ""  # robot moves that share the label and lead elsewhere: name the agenda
+        if move.agent == ROBOT and any(m.label == move.label and m.child != move.child
+                                       for m in self._moves()):
+            trace = self.sem.trace_label(before, move)
+        assessed = self.sem.seen.get((move.child.true, move.child.worlds))
+        self._forget()  # only the chosen move's assessment matters
+        self.state = move.child
+        opening = self.node is None
+        node: PolicyNode | None = None
+        if opening:
+            self._opening.pop(0)
+            if not self._opening:
+                self._enter_policy()
+                node = self.node
+        else:
+            assert edge is not None
+            # the node the edge leads to may be shared by other paths: the tracked state is
+            # checked against it all the same
+            node = self.policy.nodes[edge.to]
+            self.node = node
+            self._check(node)
+        step = Step(len(self.history) + 1, self._action(move, before.true), before, self.state,
+                    node, opening, assessed if assessed != self.state.worlds else None,
+                    trace=trace)
+        self.history.append(step)
+        return step
+
+    def _enter_policy(self) -> None:
+        self.node = self.policy.root
+        self._check(self.node)
+
+    def _check(self, node: PolicyNode) -> None:
+        """The policy node and the tracked epistemic state must describe the same situation."""
+        es, sem = self.state, self.sem
+        names = self.sem.names
+        want = {"state": self.grounded.state_atoms(es.true), "worlds": len(es.worlds), "k": es.k,
+                "copresent": sem.copresent(es.true),
+                "to_move": None if node.goal else names[es.turn]}
+        got = {"state": node.state, "worlds": node.worlds, "k": node.k,
+               "copresent": node.copresent, "to_move": node.to_move}
+        bad = [k for k in want if want[k] != got[k]]
+        if node.goal and not sem.is_goal(es):
+            bad.append("goal")
+        if bad:
+            raise PolicyMismatch(f"policy node {node.id} disagrees with the problem's semantics "
+                                 f"on {', '.join(bad)} (policy {[got.get(k) for k in bad]}, "
+                                 f"semantics {[want.get(k, False) for k in bad]}); "
+                                 "the policy does not fit this problem, solve it again")
+
+    def _action(self, m: Move, t: int | None = None) -> Action:
+        """``m`` in the domain's vocabulary, played in the true state ``t`` (default: now).
+        What is said with an action or a wait (``speech = "with-action"``) is told as it is
+        in the true state *after* the move (docs/semantics.md §5)."""
+        name, args, label = self.sem.describe(m)
+        told: tuple[str, ...] = ()
+        if m.kind in (ACTION, WAIT) and m.atoms:  # said while acting (§5), as labelled
+            after = m.child.true if m.child is not None else self.state.true if t is None else t
+            told = self.sem.literals(after, m.atoms)
+        return Action(self.sem.names[m.agent], m.kind, label, name, args, m.cost, told)
+
+    def _agenda(self, ag: Agenda) -> list[str]:  # a partially ordered block as {a | b} (§1)
+        return self.sem.net.names_of(ag)
+
+    def answer(self, es: EState, label: str) -> bool | None:
+        """Return the robot's truthful answer to the human's question ``label`` in ``es``
+        (docs/semantics.md §5: the value of the question's formula in the true state), None
+        when ``label`` is no question the human may ask there."""
+        sem = self.sem
+        states = states_of(es.worlds)
+        full = (1 << len(states)) - 1
+        for h in human_agendas(es):
+            for u in sem.H.refine_in_all(h, states):
+                if u.worlds != full and u.conds:
+                    phi = sem.uncertain_part(conj(*u.conds), states)
+                    if f"ask({sem.show(phi)})" == label:
+                        return bool(sem.g.compile(phi)(es.true))
+        return None
+
+    def _assessment(self, t: int, pre: Worlds, post: Worlds) -> str:
+        g, H = self.grounded, self.human_name
+        vis = self.sem.visible(t)
+        removed = [w for w in pre if w not in post]
+        m = 0
+        for s, _ in removed:
+            m |= (s ^ t) & vis
+        seen = ", ".join(g.atoms[i] if t >> i & 1 else f"not {g.atoms[i]}" for i in bits_of(m))
+        if set(post) <= set(pre):
+            return (f"situation assessment: {H} sees {seen or 'the scene'}, which rules out "
+                    f"{_worlds(len(removed))} ({len(pre)} -> {len(post)})")
+        return (f"situation assessment: no world fits what {H} sees ({seen}); {H} revises its "
+                f"worlds ({len(pre)} -> {len(post)})")
+
+
+def _worlds(n: int) -> str:
+    return f"{n} world" + ("" if n == 1 else "s")
+
+
+__all__ = ["Action", "ExecutionError", "Executor", "PolicyMismatch", "Step",
+           "UncoveredHumanAction", "WorldView"]

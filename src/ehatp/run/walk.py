@@ -1,0 +1,242 @@
+"""Walk a policy on every branch through :class:`~ehatp.run.executor.Executor`: the proof that a
+policy the planner returned (and the validator accepted) also *runs*.
+
+Planner and validator read the same rules (docs/semantics.md), so they can agree on a policy a
+robot cannot execute; the executor is a third reader, the one a robot uses. :func:`walk_policy`
+plays the policy as a robot would: at a robot node it does what the executor says (the move of
+the policy's recorded edge, §4), at a human node it forks once per move the policy covers (every
+AND branch, §4) and feeds it to the executor as an observed human action; each branch must end at
+a leaf where the goal holds (§6). :func:`tick_py_trees` does the same with the policy's
+behaviour tree for py_trees (``ehatp export bt``), checked against an executor on every branch.
+See docs/simulation.md and docs/behaviour-trees.md.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..errors import ExecutionError
+from ..formats.policy import Policy
+from ..model.problem import Problem
+from .executor import Executor
+
+DEFAULT_CAP = 2000
+
+
+@dataclass(frozen=True)
+class WalkReport:
+    """What :func:`walk_policy` found: ``ok`` when every branch walked reached the goal,
+    ``branches`` the branches walked to their end, ``capped`` when it stopped at the cap before
+    the last branch, ``message`` the first failure (the branch's moves, then the error)."""
+
+    ok: bool
+    branches: int
+    capped: bool
+    message: str = ""
+
+    def __str__(self) -> str:
+        head = (f"{self.branches} branches walked" + (" (capped)" if self.capped else "")
+                + (": every one reaches the goal" if self.ok else ""))
+        return head if self.ok else f"{head}; {self.message}"
+
+
+def walk_policy(problem: Problem, policy: Policy, *, cap: int = DEFAULT_CAP) -> WalkReport:
+    """Return how executing ``policy`` for ``problem`` through an :class:`Executor` went on every
+    root-to-leaf branch, depth first in the policy's order, up to ``cap`` branches.
+
+    The problem's fixed opening is replayed first (moves already made). At a robot node the robot
+    does what :meth:`Executor.next_robot_action` says; at a human node each move the policy covers
+    (docs/semantics.md §4: every human option is an AND branch) is fed to its own copy of the
+    executor (:meth:`Executor.copy`) with :meth:`Executor.observe_human_action`, by label, as a
+    robot that only sees the human's actions would (§3, "What the robot observes"). A branch
+    passes when the executor reaches a leaf of the policy where the goal holds (§6). The first
+    failure stops the walk; its message names the branch's moves and the executor's error."""
+    try:
+        start = Executor(problem, policy)
+        start.replay_opening()
+    except ExecutionError as e:
+        return WalkReport(False, 0, False, f"at the start: {e}")
+    # (executor, moves so far, the human move to feed first or None)
+    stack: list[tuple[Executor, list[str], str | None]] = [(start, [], None)]
+    branches = 0
+    while stack:
+        if branches >= cap:
+            return WalkReport(True, branches, True)
+        ex, path, pending = stack.pop()
+        try:
+            if pending is not None:
+                path.append(f"{ex.human_name} {pending}")
+                ex.observe_human_action(pending)
+            while not ex.done:
+                action = ex.next_robot_action()
+                if action is not None:
+                    path.append(f"{ex.robot_name} {action.label}")
+                    ex.robot_action_done(action.label)
+                    continue
+                assert ex.node is not None
+                labels = [m.action for m in ex.node.moves]
+                norm = ["".join(x.split()) for x in labels]
+                if len(set(norm)) != len(norm):
+                    dup = next(x for x, n in zip(labels, norm, strict=True) if norm.count(n) > 1)
+                    raise ExecutionError(
+                        f"policy node {ex.node.id} covers {ex.human_name} {dup} more than once: "
+                        f"a robot that sees only the action cannot tell its branches apart")
+                for label in reversed(labels[1:]):
+                    stack.append((ex.copy(), list(path), label))
+                path.append(f"{ex.human_name} {labels[0]}")
+                ex.observe_human_action(labels[0])
+        except ExecutionError as e:
+            return WalkReport(False, branches, False, _failure(branches + 1, path, str(e)))
+        branches += 1
+        if not ex.goal_reached:
+            assert ex.node is not None
+            return WalkReport(False, branches, False, _failure(
+                branches, path, f"policy leaf {ex.node.id} is reached but the goal does not "
+                "hold there"))
+    return WalkReport(True, branches, False)
+
+
+class _Run:
+    """One tick of the exported tree to its end, checked against its own executor: the choice
+    made at each human turn (an index into the moves the policy covers) and how many there were,
+    the moves so far, and the first error."""
+
+    def __init__(self, ex: Executor, prefix: list[int]) -> None:
+        self.ex, self.prefix = ex, prefix
+        self.choices: list[tuple[int, int]] = []  # (index chosen, moves covered)
+        self.path: list[str] = []
+        self.error = ""
+        self.goals: list[int] = []
+        self.uncovered: list[str] = []
+
+
+def tick_py_trees(problem: Problem, policy: Policy, *, cap: int = DEFAULT_CAP,
+                  ticks: int = 100_000) -> WalkReport:
+    """Return how the policy's behaviour tree for py_trees (:func:`ehatp.formats.bt.build_py_tree`,
+    ``pip install 'ehatp[bt]'``) runs on every branch, up to ``cap`` branches: the tree is
+    built once and ticked to its end once per branch, a scripted human choosing, turn after
+    turn, each move the policy covers (docs/semantics.md §4: AND branches), depth first.
+
+    Each run is checked against its own :class:`Executor`: every robot command that completes a
+    policy move is the move the executor says (label, and name and arguments for an action),
+    every answer to a question is the truthful one (§5), every human turn is at the executor's
+    policy node with the moves it expects; the tree must end in SUCCESS at the goal leaf the
+    executor reached, where the goal holds (§6), having reported nothing uncovered. At most
+    ``ticks`` ticks a branch. Raises ImportError without py_trees."""
+    from py_trees.common import Status
+
+    from ..formats.bt import build_py_tree
+    from ..formats.bt_py_trees import HumanTurn, RobotCommand
+
+    try:
+        start = Executor(problem, policy)
+        start.replay_opening()
+    except ExecutionError as e:
+        return WalkReport(False, 0, False, f"at the start: {e}")
+    run = _Run(start.copy(), [])
+
+    def fail(message: str) -> None:
+        if not run.error:
+            run.error = message
+
+    def robot(cmd: RobotCommand) -> bool:
+        ex = run.ex
+        try:
+            if cmd.question is not None:  # the answer to the question just asked
+                last = ex.history[-1]
+                yes = ex.answer(last.before, last.action.label)
+                if cmd.answer is not None and yes is not None \
+                        and cmd.answer != ("yes" if yes else "no"):
+                    fail(f"the tree answers {cmd.answer} to {cmd.question}, the truth is "
+                         f"{'yes' if yes else 'no'}")
+                    return False
+            if cmd.completes is None:
+                return True
+            want = ex.next_robot_action()
+            if want is None or "".join(want.label.split()) != "".join(cmd.completes.split()):
+                fail(f"the tree's robot does {cmd.completes}, the executor says "
+                     f"{'nothing (not the robot turn)' if want is None else want.label}")
+                return False
+            if cmd.kind == "action" and (cmd.name, cmd.args) != (want.name, want.args):
+                fail(f"the tree's robot does {cmd.name}{cmd.args}, the executor says "
+                     f"{want.name}{want.args}")
+                return False
+            run.path.append(f"{ex.robot_name} {cmd.completes}")
+            ex.robot_action_done(cmd.completes)
+        except ExecutionError as e:
+            fail(str(e))
+            return False
+        return True
+
+    def human(turn: HumanTurn) -> str:
+        ex = run.ex
+        try:
+            covered = [a.label for a in ex.expected_human_actions()]
+            here = None if ex.node is None else ex.node.id
+            if list(turn.expected) != covered or turn.node != here:
+                fail(f"the tree waits for the human at node {turn.node} expecting "
+                     f"{list(turn.expected)}; the executor is at node {here} expecting "
+                     f"{covered}")
+                return ""
+            k = len(run.choices)
+            i = run.prefix[k] if k < len(run.prefix) else 0
+            run.choices.append((i, len(covered)))
+            run.path.append(f"{ex.human_name} {covered[i]}")
+            ex.observe_human_action(covered[i])
+            return covered[i]
+        except ExecutionError as e:
+            fail(str(e))
+            return ""
+
+    # the callbacks read ``run``, the run under way (a new one for each branch)
+    root = build_py_tree(policy, robot=robot, human=human,
+                         on_goal=lambda node: run.goals.append(node),
+                         on_uncovered=lambda seen, expected: run.uncovered.append(seen),
+                         problem=problem)
+    branches, prefix = 0, list[int]()
+    while True:
+        if branches >= cap:
+            return WalkReport(True, branches, True)
+        run = _Run(start.copy(), prefix)
+        status = Status.RUNNING
+        for _ in range(ticks):
+            root.tick_once()
+            status = root.status
+            if status != Status.RUNNING or run.error:
+                break
+        ex = run.ex
+        why = run.error
+        if not why and status != Status.SUCCESS:
+            why = (f"the tree is still running after {ticks} ticks" if status == Status.RUNNING
+                   else f"the tree ends in {status.value}"
+                   + (f" (uncovered: {', '.join(run.uncovered)})" if run.uncovered else ""))
+        elif not why and not (ex.done and ex.goal_reached):
+            why = "the tree succeeds where the executor has not reached the goal"
+        elif not why and (ex.node is None or run.goals != [ex.node.id]):
+            why = f"the tree reports the goals {run.goals}, the executor is at a leaf " + (
+                "" if ex.node is None else str(ex.node.id))
+        if why:
+            if status == Status.RUNNING:
+                root.stop(Status.INVALID)
+            return WalkReport(False, branches, False, _failure(branches + 1, run.path, why))
+        branches += 1
+        # the next branch: the last choice that has a next option, depth first
+        choices = list(run.choices)
+        while choices and choices[-1][0] + 1 >= choices[-1][1]:
+            choices.pop()
+        if not choices:
+            return WalkReport(True, branches, False)
+        prefix = [i for i, _ in choices[:-1]] + [choices[-1][0] + 1]
+
+
+MOVES_SHOWN = 12  # the last moves of a failing branch that its message lists
+
+
+def _failure(n: int, path: list[str], error: str) -> str:
+    moves = "; ".join(path[-MOVES_SHOWN:]) if path else "no move"
+    if len(path) > MOVES_SHOWN:
+        moves = f"{len(path) - MOVES_SHOWN} moves, then {moves}"
+    return f"branch {n} ({moves}): {error}"
+
+
+__all__ = ["DEFAULT_CAP", "WalkReport", "tick_py_trees", "walk_policy"]
