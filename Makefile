@@ -2,7 +2,7 @@
 VENV ?= .venv
 BIN := $(VENV)/bin
 
-.PHONY: demo test lint bench system-deps clean
+.PHONY: demo test test-fast lint bench system-deps clean
 
 $(VENV)/.installed: pyproject.toml
 	python3 -m venv $(VENV)
@@ -20,10 +20,15 @@ demo: $(VENV)/.installed
 	@echo
 	@echo "    . $(VENV)/bin/activate"
 
-## Run the whole test suite (ruff and mypy included).
+## Run the whole test suite, slow tests, ruff and mypy included (what CI runs).
 test: $(VENV)/.installed
 	$(BIN)/python -m pytest
 
+## The loop while editing: every test not marked slow (under a minute on two cores).
+test-fast: $(VENV)/.installed
+	$(BIN)/python -m pytest -m "not slow"
+
+## ruff and mypy alone.
 lint: $(VENV)/.installed
 	$(BIN)/ruff check src tests benchmarks examples
 	$(BIN)/mypy

@@ -29,6 +29,7 @@ def _specs() -> tuple[randomgen.Spec, ...]:
     return tuple(randomgen.draw(seed) for seed in SEEDS)
 
 
+@pytest.mark.slow  # 300 random problems, as benchmarks/agreement.py
 def test_planner_and_validator_agree_and_every_policy_executes_on_random_problems() -> None:
     seeds = [*SAMPLE, *FOUND]
     outcomes = randomgen.run(seeds, jobs=min(2, os.cpu_count() or 1))

@@ -214,7 +214,7 @@ def test_the_executor_explains_questions_answers_and_announcements() -> None:
 
 # -- the imported IPC-2020 domains (tests/test_hddl.py solves and validates them) ---------------
 
-# solved in a few seconds each; the slower ones are marked slow
+# solved in a few seconds each, the last two in tens of seconds; all are slow for `make test-fast`
 IPC_QUICK = ("2020-to-Blocksworld-GTOHP", "2020-to-Factories-simple", "2020-to-Towers",
              "2020-po-Satellite", "2020-to-Elevator-Learned-ECAI-16", "2020-to-Robot",
              "2020-to-Transport", "2020-po-Transport", "2020-to-Hiking", "2020-to-Snake",
@@ -225,9 +225,9 @@ IPC_QUICK = ("2020-to-Blocksworld-GTOHP", "2020-to-Factories-simple", "2020-to-T
 IPC_SLOW = ("2020-to-Childsnack", "2020-to-Minecraft-Player")
 
 
+@pytest.mark.slow
 @pytest.mark.filterwarnings("ignore:.*deprecated - use:DeprecationWarning")
-@pytest.mark.parametrize("name", [*IPC_QUICK, *(pytest.param(n, marks=pytest.mark.slow)
-                                                 for n in IPC_SLOW)])
+@pytest.mark.parametrize("name", [*IPC_QUICK, *IPC_SLOW])
 def test_every_imported_ipc_domain_that_validates_walks_to_the_goal(name: str) -> None:
     pytest.importorskip("unified_planning", reason="ehatp[hddl] (unified-planning) not installed")
     from ehatp.tools import hddl

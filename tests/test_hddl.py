@@ -14,8 +14,10 @@ import pytest
 import ehatp
 
 pytest.importorskip("unified_planning", reason="ehatp[hddl] (unified-planning) not installed")
-# unified-planning's reader calls a pyparsing name pyparsing now deprecates
-pytestmark = pytest.mark.filterwarnings("ignore:.*deprecated - use:DeprecationWarning")
+# unified-planning's reader calls a pyparsing name pyparsing now deprecates; the whole module is
+# slow (the IPC domains: about 40 % of the suite), `make test-fast` leaves it out
+pytestmark = [pytest.mark.filterwarnings("ignore:.*deprecated - use:DeprecationWarning"),
+              pytest.mark.slow]
 
 from ehatp.tools import hddl  # noqa: E402
 

@@ -170,6 +170,7 @@ def test_table1_policies_do_not_change(example: Example, monkeypatch: pytest.Mon
                                                                   symmetry)
 
 
+@pytest.mark.slow  # 300 random problems, each solved twice
 def test_random_policies_do_not_change(monkeypatch: pytest.MonkeyPatch) -> None:
     compared = 0
     for seed in range(300):

@@ -89,6 +89,7 @@ def test_a_stopped_write_leaves_no_file(tmp_path: Path) -> None:
     assert f.read_text(encoding="utf-8") == r.policy.to_json()
 
 
+@pytest.mark.slow  # sleeps 2.2 s past its time limit
 def test_cli_timeout_during_writing_writes_nothing(monkeypatch: pytest.MonkeyPatch,
                                                    tmp_path: Path) -> None:
     from typer.testing import CliRunner

@@ -225,6 +225,7 @@ def _as_validator(sem: V._Semantics, ag: tuple[object, ...]) -> V.Agenda:
     return tuple(out)
 
 
+@pytest.mark.slow  # random problems
 def test_planner_and_validator_build_and_print_networks_alike() -> None:
     """The two independent implementations of the canonical form and of printing agree on
     random partial orders (tasks repeat), and after refining or finishing a member; the form

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -21,6 +22,7 @@ SETTINGS = settings(max_examples=120, deadline=None, derandomize=True,
 LIMITS = {"max_states": randomgen.MAX_STATES, "timeout": 10}
 
 
+@pytest.mark.slow  # 120 random problems
 @SETTINGS
 @given(st.integers(0, 2**32 - 1))
 def test_policies_pass_the_validator_execute_and_do_not_depend_on_declaration_order(

@@ -43,6 +43,7 @@ def _plan_solves_what_next_solves(seed: int, max_atoms: int | None) -> bool | No
     return plan.status == "solved"
 
 
+@pytest.mark.slow  # random problems, each solved twice
 @pytest.mark.parametrize("max_atoms", [None, 1], ids=["informing sets as drawn",
                                                       "informing sets of one atom"])
 def test_relevance_plan_solves_every_random_problem_that_relevance_next_solves(

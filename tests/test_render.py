@@ -373,6 +373,7 @@ SMALLEST_TEXT = """
 """
 
 
+@pytest.mark.slow  # a real Chromium
 def test_click_node_and_read_world_table(policy_files: dict[str, Path], tmp_path: Path,
                                          browser: Any) -> None:
     from selenium.webdriver.common.by import By
@@ -475,6 +476,7 @@ def big_policy(levels: int, width: int) -> Policy:
     return policy
 
 
+@pytest.mark.slow  # a real Chromium
 @pytest.mark.parametrize("name", ["p2", "big"])
 def test_explorer_opens_readable_with_a_timeline(policy_files: dict[str, Path], tmp_path: Path,
                                                  browser: Any, name: str) -> None:

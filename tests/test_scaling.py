@@ -155,6 +155,7 @@ def test_live_worst_case_values_are_knuths_after_every_expansion(
     assert _check_live_values(monkeypatch, ehatp.load(ROOT / "examples" / name)) > 0
 
 
+@pytest.mark.slow  # random problems, each searched with the live values checked
 def test_live_values_on_random_problems(monkeypatch: pytest.MonkeyPatch) -> None:
     from ehatp.tools import randomgen
 

@@ -227,6 +227,7 @@ def test_resume_runs_only_missing_rows(problems: Path, grid: Path, tmp_path: Pat
     assert code == 2 and "add --resume" in err and len(rows_of(out)) == 12
 
 
+@pytest.mark.slow
 def test_a_memory_hungry_instance_is_an_error_row(problems: Path, tmp_path: Path) -> None:
     (problems / "big.toml").write_text(BIG, encoding="utf-8")
     out = tmp_path / "r.jsonl"
@@ -255,6 +256,7 @@ def make(hang: bool = False, **options):
 """
 
 
+@pytest.mark.slow
 def test_a_runaway_worker_is_ended_and_reported(problems: Path, tmp_path: Path) -> None:
     (problems / "runaway.py").write_text(RUNAWAY, encoding="utf-8")
     text = (problems / "p1.toml").read_text(encoding="utf-8")
@@ -383,6 +385,7 @@ def dask_cluster() -> Iterator[Any]:
         cluster.close()
 
 
+@pytest.mark.slow
 def test_dask_watches_the_memory_budget(dask_cluster: Any, problems: Path,
                                         tmp_path: Path) -> None:
     # the workers are threads of this process: a kernel limit would hit the scheduler and
@@ -398,6 +401,7 @@ def test_dask_watches_the_memory_budget(dask_cluster: Any, problems: Path,
     assert [r["status"] for n, r in sorted(rows.items()) if n != "big.toml"] == ["solved"] * 3
 
 
+@pytest.mark.slow
 def test_dask_gives_the_same_rows(dask_cluster: Any, problems: Path, grid: Path,
                                   tmp_path: Path, local_rows: list[dict[str, Any]]) -> None:
     out = tmp_path / "dask.jsonl"

@@ -395,6 +395,7 @@ def test_the_cube_domain_refuses_an_unknown_encoding() -> None:
 # --- the agreement benchmark draws them ---------------------------------------------------------
 
 
+@pytest.mark.slow  # 80 random problems through the agreement check
 def test_the_random_generator_draws_variables_and_counters() -> None:
     """benchmarks/agreement.py's problems include state variables (seen whole, or per value)
     and counters, and planner and validator agree on them."""
