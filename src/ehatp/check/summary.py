@@ -1,0 +1,154 @@
+"""The validator's last checks (docs/semantics.md §7, docs/policy-format.md): the costs and
+objective a policy records, every node's value recomputed from the validator's own move costs
+(worst case and expected), the policy's cost, and its branches and communications counted in
+its tree unfolding.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+from ..model.options import ObjectiveKind
+from ..model.vocabulary import ROBOT
+from .replay import Replay
+from .rules import ANNOUNCE, ASK, INFORM, _num, _same
+
+COMMUNICATIONS = (INFORM, ASK, ANNOUNCE)  # the moves counted as communications (§5)
+
+
+def check_costs(rp: Replay) -> None:
+    c = rp.problem.costs
+    want: dict[str, object] = {"inform": c.inform, "ask": c.ask, "wait": c.wait,
+                               "pass": c.pass_}
+    got = rp.policy.costs
+    for key, v in want.items():
+        if key not in got or not _same(got[key], v):
+            rp.fail([], f"policy costs[{key!r}] is {got.get(key)}, the problem's is {v}")
+    acts = got.get("actions", {})
+    if set(acts) != set(c.actions) or any(not _same(acts[a], c.actions[a]) for a in acts):
+        rp.fail([], f"policy costs['actions'] is {acts}, the problem's is "
+                  f"{dict(c.actions)}")
+
+
+def values(rp: Replay, order: list[int] | None
+           ) -> tuple[dict[int, Fraction | None], dict[int, Fraction | None]]:
+    """§7: the worst-case and the expected cost-to-go of every node, from the validator's
+    own move costs and the problem's weights, children before parents; None under a
+    violation (or everywhere on a cyclic policy)."""
+    nodes = rp.policy.nodes
+    worst: dict[int, Fraction | None] = {}
+    mean: dict[int, Fraction | None] = {}
+    for n in order or []:
+        node = nodes[n]
+        worst[n] = mean[n] = None
+        if not node.moves:
+            if n in rp.goals_reached:
+                worst[n] = mean[n] = Fraction(0)
+            continue
+        turn = rp.turn.get(n)
+        if turn is None or (turn == ROBOT and len(node.moves) != 1):
+            continue
+        parts: list[tuple[Fraction, Fraction, Fraction]] = []
+        for j, m in enumerate(node.moves):
+            w, v, cost = worst.get(m.to), mean.get(m.to), rp.step_cost.get((n, j))
+            if w is None or v is None or cost is None:
+                break
+            parts.append((cost + w, cost + v, rp.weight.get((n, j), Fraction(1))))
+        else:
+            worst[n] = max(p[0] for p in parts)
+            total = sum((p[2] for p in parts), Fraction(0))
+            mean[n] = sum((p[2] * p[1] for p in parts), Fraction(0)) / total
+    return worst, mean
+
+
+def check_objective(rp: Replay) -> None:
+    """§7: the policy's objective is the problem's (kind, and weights and ties if given)."""
+    got, want = rp.policy.objective, rp.problem.objective
+    kind = got.get("kind") if isinstance(got, dict) else None
+    if kind != want.kind.value:
+        rp.fail([], f"policy objective kind is {kind!r}, but the problem's objective is "
+                  f"{want.kind.value!r} (section 7)")
+        return
+    weights = got.get("weights")
+    if weights is not None:
+        mine = {"".join(str(k).split()): v for k, v in dict(weights).items()}
+        if set(mine) != set(want.weights) or any(not _same(mine[k], want.weights[k])
+                                                 for k in mine):
+            theirs = ", ".join(f"{k!r}: {_num(v)}" for k, v in want.weights.items())
+            rp.fail([], f"policy objective weights are {dict(weights)}, but the "
+                      f"problem's are {{{theirs}}} (section 7)")
+    ties = got.get("ties")
+    if ties is not None and list(ties) != list(want.ties):
+        rp.fail([], f"policy objective ties are {list(ties)}, but the problem's are "
+                  f"{[str(t) for t in want.ties]} (section 7)")
+
+
+def check_summary(rp: Replay, order: list[int] | None) -> None:
+    pol = rp.policy
+    nodes = pol.nodes
+    worst, mean = values(rp, order)
+    expected = rp.problem.objective.kind == ObjectiveKind.EXPECTED
+    val, what = (mean, "expected") if expected else (worst, "worst-case")
+    path_to = paths(rp)
+    for n in sorted(val, key=lambda i: (len(path_to.get(i, [])), i)):
+        v = val[n]
+        if v is not None and not _same(nodes[n].value, v):
+            rp.fail(path_to.get(n, []), f"node {n} ({reached_by(rp, n)}): value is "
+                      f"{nodes[n].value}, but its {what} cost-to-go is {_num(v)} "
+                      "(section 7)")
+    root_value = val.get(0)
+    if not _same(pol.cost, nodes[0].value):
+        rp.fail([], f"policy cost is {pol.cost}, but the root's value is "
+                  f"{nodes[0].value}")
+    elif root_value is not None and not _same(pol.cost, root_value):
+        rp.fail([], f"policy cost is {pol.cost}, but the {what} cost is "
+                  f"{_num(root_value)}")
+    for name, got, want in (("worst_case", pol.worst_case, worst.get(0)),
+                            ("expected", pol.expected, mean.get(0))):
+        if got is not None and want is not None and not _same(got, want):
+            rp.fail([], f"policy {name} is {got}, but the policy's "
+                      f"{name.replace('_', '-')} cost is {_num(want)} (section 7)")
+    if order is None:
+        return
+    # counted in the tree unfolding, by the number of root paths reaching each node
+    reach = dict.fromkeys(order, 0)
+    reach[0] = 1
+    comms = leaves = 0
+    for n in reversed(order):  # parents first
+        for m in nodes[n].moves:
+            reach[m.to] += reach[n]
+            if m.kind in COMMUNICATIONS or m.told:
+                comms += reach[n]
+        if not nodes[n].moves:
+            leaves += reach[n]
+    if pol.communications != comms:
+        rp.fail([], f"communications is {pol.communications}, but the policy has "
+                  f"{comms} inform/ask/announce moves and moves said with an inform "
+                  "(counted in its tree unfolding)")
+    if pol.leaves != leaves:
+        rp.fail([], f"leaves is {pol.leaves}, but the policy has {leaves} leaves in its "
+                  "tree unfolding (root-to-leaf branches)")
+
+
+def reached_by(rp: Replay, n: int) -> str:
+    """How node ``n`` was first reached: "start", or the move into it."""
+    path = paths(rp).get(n)
+    return path[-1] if path else "start"
+
+
+def paths(rp: Replay) -> dict[int, list[str]]:
+    """The path to each node: the one it was first checked by, else the first found."""
+    nodes = rp.policy.nodes
+    out: dict[int, list[str]] = {0: [], **rp.path_of}
+    stack = list(out)
+    while stack:
+        n = stack.pop()
+        for m in nodes[n].moves:
+            if 0 <= m.to < len(nodes) and m.to not in out:
+                out[m.to] = [*out[n], f"{m.agent} {m.action}"]
+                stack.append(m.to)
+    return out
+
+
+
+__all__ = ["check_costs", "check_objective", "check_summary"]
