@@ -24,20 +24,16 @@ runnable py_trees behaviours live in :mod:`ehatp.formats.bt_py_trees` (``ehatp[b
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import TYPE_CHECKING, Any
 from xml.sax.saxutils import escape
 
+from .bt_tree import MAIN_TREE, SEP, BTNode, Forest, blackboard_key, tree_id
 from .policy import Policy, PolicyMove
 
 if TYPE_CHECKING:
     from ..model.problem import Problem
     from .bt_py_trees import HumanFn, OnGoal, OnUncovered, RobotFn
-
-MAIN_TREE = "Policy"
-SEP = ";"  # list separator in a port value (BehaviorTree.CPP splits vectors on it)
-
 
 class BTFormat(StrEnum):
     btcpp4 = "btcpp4"
@@ -87,40 +83,6 @@ CUSTOM_NODES: tuple[tuple[str, str, str, tuple[tuple[str, str, str], ...]], ...]
     )),
 )
 CUSTOM_IDS = frozenset(c[1] for c in CUSTOM_NODES)
-
-
-@dataclass
-class BTNode:
-    """One node of the tree: its BehaviorTree.CPP tag (node ID) and ports, in writing order.
-    Not written to XML: ``completes``, the label of the robot's policy move that this node
-    finishes (the last node of each robot move), and ``node``, the policy node of a human
-    choice's ``Fallback``."""
-
-    tag: str
-    attrs: dict[str, str] = field(default_factory=dict)
-    children: list[BTNode] = field(default_factory=list)
-    completes: str | None = None
-    node: int | None = None
-
-
-@dataclass
-class Forest:
-    """The main tree and one tree per shared policy node, by ID (the main tree first, then by
-    node id)."""
-
-    main: str
-    trees: dict[str, BTNode]
-    policy: Policy
-
-
-def tree_id(node: int) -> str:
-    """The BehaviorTree ID of the shared policy node ``node``."""
-    return f"Node_{node}"
-
-
-def blackboard_key(node: int) -> str:
-    """The blackboard entry where the human's action at policy node ``node`` is written."""
-    return f"human_action_{node}"
 
 
 def shared_nodes(policy: Policy) -> list[int]:

@@ -30,7 +30,7 @@ from py_trees.behaviours import Failure
 from py_trees.common import Status
 from py_trees.composites import Selector, Sequence
 
-from .bt import SEP, BTNode, Forest
+from .bt_tree import SEP, BTNode, Forest
 
 
 @dataclass(frozen=True)
