@@ -192,7 +192,7 @@ class Replay:
         for u, said in parsed:  # the label tells literals (values) of T
             truth = sem.say(es.true, u)
             if said != truth:
-                if u in sem.g.unit_names:
+                if u in sem.grounded.unit_names:
                     return f"the label tells {said}, but T has {truth}{when}"
                 value = not said.startswith("not ")
                 name = said[4:] if not value else said

@@ -74,9 +74,11 @@ def bits_of(m: int) -> list[int]:
 
 
 class Semantics:
-    def __init__(self, g: Grounded) -> None:
-        self.g = g
-        p = g.problem
+    """The transition rules (docs/semantics.md §2-§6) over one ground problem."""
+
+    def __init__(self, grounded: Grounded) -> None:
+        self.grounded = grounded
+        p = grounded.problem
         self.K = p.K
         self.costs = p.costs
         self.human_model = p.human
@@ -84,16 +86,21 @@ class Semantics:
         self._plans: dict[tuple[Agenda, int, int], frozenset[tuple[int, ...]]] = {}
         self.names = (p.domain.robot_name, p.domain.human_name)
         limit = p.limits.max_decomposition
-        self.net = Networks(g.task_names)  # partially ordered agendas (§1), shared
-        self.R = Refiner(g.robot, g.task_names, limit, self.net)
-        self.H = Refiner(g.human, g.task_names, limit, self.net)
-        self.RH = (self.R if g.robot_seen_by_human is g.robot
-                   else Refiner(g.robot_seen_by_human, g.task_names, limit, self.net))
+        self.net = Networks(grounded.task_names)  # partially ordered agendas (§1), shared
+        self.R = Refiner(grounded.robot, grounded.task_names, limit, self.net)
+        self.H = Refiner(grounded.human, grounded.task_names, limit, self.net)
+        self.RH = (self.R if grounded.robot_seen_by_human is grounded.robot
+                   else Refiner(grounded.robot_seen_by_human, grounded.task_names, limit, self.net))
         self._vis: dict[int, int] = {}
         self._cop: dict[int, bool] = {}
         self._succ: dict[World, tuple[World, ...]] = {}
         self._inform: dict[tuple[int, Agenda, tuple[Agenda, ...], Worlds], tuple[int, ...]] = {}
         self.check: Callable[[], None] = no_check
+
+    @property
+    def g(self) -> Grounded:
+        """The ground problem, by its older name (:attr:`grounded`)."""
+        return self.grounded
 
     def bound(self, check: Callable[[], None]) -> None:
         """Have ``check`` called now and then while moves are computed (a time or memory
@@ -151,9 +158,9 @@ class Semantics:
     def describe(self, move: Move) -> Call:
         """The move as name, arguments and label (§4-§5): the one translation used by the
         policy writer, the executor and the simulator."""
-        g = self.g
+        grounded = self.grounded
         if move.op >= 0:
-            op = (g.robot.ops if move.agent == ROBOT else g.human.ops)[move.op]
+            op = (grounded.robot.ops if move.agent == ROBOT else grounded.human.ops)[move.op]
             return Call(op.schema, tuple(op.args), move.label)
         if move.kind == WAIT:
             return Call(WAIT, (), move.label)
@@ -167,20 +174,22 @@ class Semantics:
     def literals(self, t: int, mask: int) -> tuple[str, ...]:
         """§5: the units of ``mask`` as ``t`` has them: ``a`` when true, ``not a`` when false,
         ``loc(r) = mt`` for a state variable, ``balls(b1) = 2`` for a counter."""
-        return tuple(self.g.literals(t, mask))
+        return tuple(self.grounded.literals(t, mask))
 
     # -- basics ---------------------------------------------------------------------------
     def initial(self) -> EState:
         """§3-§5: the root: the designated world, the belief worlds after situation assessment (with
         the robot agendas the human can hold), and, under speech "with-action", the robot's speech
         opening."""
-        g = self.g
-        turn = HUMAN if g.problem.starts == "human" else ROBOT
-        worlds = self.assess(g.init, normalize((s, self.attributed(ag)) for s, ag in g.beliefs))
-        worlds = self.sees_done(g.init, g.robot_agenda, worlds)
-        es = EState(turn, g.init, g.robot_agenda, (g.human_agenda,), worlds, 0, 0)
+        grounded = self.grounded
+        turn = HUMAN if grounded.problem.starts == "human" else ROBOT
+        init = grounded.init
+        worlds = self.assess(init, normalize((s, self.attributed(ag))
+                                             for s, ag in grounded.beliefs))
+        worlds = self.sees_done(init, grounded.robot_agenda, worlds)
+        es = EState(turn, init, grounded.robot_agenda, (grounded.human_agenda,), worlds, 0, 0)
         if (turn == HUMAN and self.comm.speech == Speech.WITH_ACTION
-                and (self.copresent(g.init) or self.comm.inform == InformWhere.ANYWHERE)
+                and (self.copresent(grounded.init) or self.comm.inform == InformWhere.ANYWHERE)
                 and self.informing_sets(es)):
             # §5: the robot may speak before the human's very first move
             es = es._replace(turn=ROBOT, opening=True)
@@ -190,14 +199,14 @@ class Semantics:
         """§2: the domain's co-presence formula in the true state ``t`` (memoised)."""
         c = self._cop.get(t)
         if c is None:
-            c = self._cop[t] = self.g.copresent(t)
+            c = self._cop[t] = self.grounded.copresent(t)
         return c
 
     def visible(self, t: int) -> int:
         """§2: the mask of observable atoms whose visibility condition holds in ``t``."""
         v = self._vis.get(t)
         if v is None:
-            v = self._vis[t] = self.g.visible_mask(t)
+            v = self._vis[t] = self.grounded.visible_mask(t)
         return v
 
     def assess(self, t: int, worlds: Worlds) -> Worlds:
@@ -219,22 +228,22 @@ class Semantics:
         value when ``mask`` holds it, else each world becomes one world per value ``mask``
         does not show false (exactly one value, always)."""
         ws = list(worlds)
-        g = self.g
-        if not mask & g.multi_mask:
+        grounded = self.grounded
+        if not mask & grounded.multi_mask:
             for i in bits_of(mask):
                 bit = 1 << i
                 tb = t & bit
                 keep = [w for w in ws if w[0] & bit == tb]
                 ws = keep if keep else [((s & ~bit) | tb, a) for s, a in ws]
             return normalize(ws)
-        for u in g.units(mask):
+        for u in grounded.units(mask):
             part = u & mask
             tb = t & part
             keep = [w for w in ws if w[0] & part == tb]
             if keep:
                 ws = keep
-            elif tb or u not in g.unit_names or u in g.counter_max:
-                whole = u if u in g.unit_names and u not in g.counter_max else part
+            elif tb or u not in grounded.unit_names or u in grounded.counter_max:
+                whole = u if u in grounded.unit_names and u not in grounded.counter_max else part
                 ws = [((s & ~whole) | (t & whole), a) for s, a in ws]
             else:  # "not this value" with no world agreeing: any value not seen false
                 ws = [((s & ~u) | 1 << i, a) for s, a in ws for i in bits_of(u & ~part)]
@@ -242,18 +251,18 @@ class Semantics:
 
     def robot_op(self, op: int) -> GOp:
         """§4: the robot action as it really is (M_R)."""
-        return self.g.robot.ops[op]
+        return self.grounded.robot.ops[op]
 
     def anticipated_op(self, op: int) -> GOp:
         """The robot action as the human understands it (M_R^H), else as it really is."""
-        return self.g.robot_seen_by_human.ops.get(op) or self.g.robot.ops[op]
+        return self.grounded.robot_seen_by_human.ops.get(op) or self.grounded.robot.ops[op]
 
     def attributed(self, agenda: Agenda) -> Agenda:
         """§4: the robot agenda as the human holds it after revising its beliefs: the tasks of
         ``agenda`` its model of the robot (M_R^H) knows. A task M_R^H has no operator, method
         or done-condition for is dropped: the human can expect nothing of it."""
-        m = self.g.robot_seen_by_human
-        if m is self.g.robot:
+        m = self.grounded.robot_seen_by_human
+        if m is self.grounded.robot:
             return agenda
         return self.net.keep(agenda,
                              lambda t: t in m.ops or bool(m.methods.get(t)) or t in m.done)
@@ -305,7 +314,7 @@ class Semantics:
 
     def is_goal(self, es: EState) -> bool:
         """§6: goal formula in T, both agendas finished, and the human believes the robot done."""
-        return (self.g.goal(es.true) and self.robot_done(es) and self.human_done(es)
+        return (self.grounded.goal(es.true) and self.robot_done(es) and self.human_done(es)
                 and self.human_believes_robot_done(es))
 
     # -- moves ----------------------------------------------------------------------------
@@ -413,7 +422,7 @@ class Semantics:
             if not new:  # the human could not have expected it: revise
                 told = self.attributed(rest)
                 new = [(seen_op.apply(s), told) for s, _ in es.worlds]
-            inf = self.g.expand(es.true ^ t2) & self.g.inferable_mask
+            inf = self.grounded.expand(es.true ^ t2) & self.grounded.inferable_mask
             if inf:
                 new = [((s & ~inf) | (t2 & inf), a) for s, a in new]
             worlds, k = normalize(new), es.k
@@ -484,7 +493,7 @@ class Semantics:
         out: list[Move] = []
         if self.human_model.intentions == Intentions.VISIBLE:
             for op, rests in acts.items():
-                gop = self.g.human.ops[op]
+                gop = self.grounded.human.ops[op]
                 for rest in dict.fromkeys(rests):
                     m = self.human_exec(es, gop, (rest,))
                     if len(rests) > 1:
@@ -492,7 +501,7 @@ class Semantics:
                     out.append(m)
         else:
             for op, rests in acts.items():
-                out.append(self.human_exec(es, self.g.human.ops[op], _hypotheses(rests)))
+                out.append(self.human_exec(es, self.grounded.human.ops[op], _hypotheses(rests)))
         for label, (phi, hs) in sorted(asks.items()):
             out.append(Move(HUMAN, ASK, f"ask({label})", self.costs.ask,
                             self.ask(es, phi)._replace(human_agendas=_hypotheses(hs))))
@@ -508,13 +517,13 @@ class Semantics:
         ``rests`` are the hypotheses after it (§3)."""
         t = es.true
         if not op.pre(t):
-            false = [self.g.unit_name(u)
-                     for u in self.g.units(self._unmet(op, t, es.worlds[0][0]))]
+            false = [self.grounded.unit_name(u)
+                     for u in self.grounded.units(self._unmet(op, t, es.worlds[0][0]))]
             why = f"{self.names[HUMAN]} does {op.name} on a false belief"
             return Move(HUMAN, ACTION, op.name, op.cost, None, op.id,
                         failure=why + (f" ({', '.join(false)})" if false else ""))
         t2 = op.apply(t)
-        inf = self.g.expand(t ^ t2) & self.g.inferable_mask
+        inf = self.grounded.expand(t ^ t2) & self.grounded.inferable_mask
         new = []
         for s, ag in es.worlds:
             s2 = op.apply(s)
@@ -538,7 +547,7 @@ class Semantics:
         parts = phi.args if isinstance(phi, And) else (phi,)
         keep: list[Formula] = []
         for p in parts:
-            fn = self.g.compile(p)
+            fn = self.grounded.compile(p)
             if p not in keep and len({fn(s) for s in states}) > 1:
                 keep.append(p)
         return conj(*keep) if keep else phi
@@ -546,21 +555,21 @@ class Semantics:
     def show(self, f: Formula) -> str:
         """§4: a formula as the domain wrote it (derived predicates by name), for ``ask`` labels."""
         parts = f.args if isinstance(f, And) else (f,)
-        shown = self.g.display
+        shown = self.grounded.display
         # str() of a formula is costly: only when the domain gave no display name
         return " and ".join(d if (d := shown.get(p)) is not None else str(p) for p in parts)
 
     def ask(self, es: EState, phi: Formula) -> EState:
         """§5: the robot answers ``ask(phi)`` truthfully: the worlds where ``phi`` differs from T
         are dropped."""
-        fn = self.g.compile(phi)
+        fn = self.grounded.compile(phi)
         v = fn(es.true)
         keep = tuple(w for w in es.worlds if fn(w[0]) == v)
         if not keep:  # cannot happen for asks the human generates; revise to be safe
             m = 0
             for i in ground_atoms(phi):
                 m |= 1 << i
-            keep = self.observe(es.true, es.worlds, self.g.expand(m))
+            keep = self.observe(es.true, es.worlds, self.grounded.expand(m))
         return es._replace(turn=ROBOT, worlds=keep, passive=0, forced=False)
 
     def inform(self, es: EState, mask: int) -> EState:
@@ -617,7 +626,7 @@ class Semantics:
                 if op == FINISH:
                     out.add((FINISH,))
                     continue
-                s2 = self.g.human.ops[op].apply(s)
+                s2 = self.grounded.human.ops[op].apply(s)
                 out.update((op, *tail) for tail in self._plans_from(rest, s2, left - 1))
             r = self._plans[key] = frozenset(out)
         return r
@@ -668,8 +677,8 @@ class Semantics:
         p_diff = plan and self._plans_differ(es.human_agendas, t, es.worlds)
         if not (h_diff or r_diff or p_diff):
             return 0
-        g = self.g
-        cands = g.units(div)  # an atom, or a variable or counter told whole
+        grounded = self.grounded
+        cands = grounded.units(div)  # an atom, or a variable or counter told whole
         # make every view equal (fixing one must not break another); failing that, the
         # human's own (next options and plans) alone
         targets = [True] + ([False] if h_diff or p_diff else [])
@@ -685,8 +694,8 @@ class Semantics:
                         continue
                     # prefer fewer remaining worlds, then telling what is true (a value counts
                     # as true), then by name
-                    told = sum(1 for u in combo if t & u or u in g.unit_names)
-                    rank = (len(w2), -told, [g.unit_name(u) for u in combo], m)
+                    told = sum(1 for u in combo if t & u or u in grounded.unit_names)
+                    rank = (len(w2), -told, [grounded.unit_name(u) for u in combo], m)
                     if best is None or rank < best:
                         best = rank
                 if best is not None:

@@ -56,15 +56,15 @@ def _goal_unreached(grounded: Grounded, graph: Graph) -> str | None:
     return None
 
 
-def _missing_literals(g: Grounded, trues: Sequence[int]) -> list[str]:
+def _missing_literals(grounded: Grounded, trues: Sequence[int]) -> list[str]:
     """Goal literals no explored true state satisfies: the problem's ``goal`` first (a static
     one is fixed by ``[init]``), then the other conjuncts of the ground goal."""
     out: list[str] = []
     covered: set[Formula] = set()
-    p = g.problem
+    p = grounded.problem
     for positive, (name, args) in p.goal:
         text = call_str(name, args)
-        idx = g.atom_index.get(text)
+        idx = grounded.atom_index.get(text)
         if idx is None:  # a predicate no action changes: its value is the initial one
             reached = ((name, args) in p.init) == positive
         else:
@@ -75,39 +75,40 @@ def _missing_literals(g: Grounded, trues: Sequence[int]) -> list[str]:
             out.append(text if positive else f"not {text}")
     if out:
         return out
-    parts = g.goal_f.args if isinstance(g.goal_f, And) else (g.goal_f,)
+    parts = grounded.goal_f.args if isinstance(grounded.goal_f, And) else (grounded.goal_f,)
     for part in parts:
         if part == TRUE or part in covered:
             continue
-        if part == FALSE or not any(g.compile(part)(t) for t in trues):
+        if part == FALSE or not any(grounded.compile(part)(t) for t in trues):
             out.append(_short(_show(part)))
     return out
 
 
-def _agendas(g: Grounded, graph: Graph) -> str | None:
+def _agendas(grounded: Grounded, graph: Graph) -> str | None:
     """Which agenda never finishes in a state where the goal holds, if one does not."""
     sem = graph.sem
     r_name, h_name = sem.names
     n = len(graph.states)
     seen = f"{n} explored state{'s' if n != 1 else ''}"
-    at_goal = [es for es in graph.states if g.goal(es.true)]
+    at_goal = [es for es in graph.states if grounded.goal(es.true)]
     robot_done = [es for es in at_goal if sem.robot_done(es)]
     if not robot_done:
-        return (f"{r_name} never finishes its agenda ({_agenda(g, g.robot_agenda)}) in a state "
-                f"where the goal holds ({seen})")
+        return (f"{r_name} never finishes its agenda "
+                f"({_agenda(grounded, grounded.robot_agenda)}) in a state where the goal holds "
+                f"({seen})")
     both_done = [es for es in robot_done if sem.human_done(es)]
     if not both_done:
-        return (f"{h_name} never finishes its agenda ({_agenda(g, g.human_agenda)}) in a state "
-                f"where the goal holds and {r_name} has finished ({seen}): the two agendas "
-                "never finish together")
+        return (f"{h_name} never finishes its agenda "
+                f"({_agenda(grounded, grounded.human_agenda)}) in a state where the goal holds "
+                f"and {r_name} has finished ({seen}): the two agendas never finish together")
     if not any(sem.human_believes_robot_done(es) for es in both_done):
         return (f"where both agendas are finished and the goal holds, {h_name} never believes "
                 f"{r_name} is done ({seen})")
     return None
 
 
-def _agenda(g: Grounded, agenda: Sequence[int]) -> str:
-    names = [g.task_names[t] for t in agenda if t != FINISH]
+def _agenda(grounded: Grounded, agenda: Sequence[int]) -> str:
+    names = [grounded.task_names[t] for t in agenda if t != FINISH]
     return ", ".join(names) if names else "empty"
 
 

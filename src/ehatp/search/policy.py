@@ -44,7 +44,7 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
     for i, n in enumerate(order):
         check()
         nodes.append(_policy_node(gr, i, n, [_policy_move(gr, e, index) for e in chosen(n)]))
-    return _policy(gr.sem.g.problem, problem_name, nodes, optimal, stats or {})
+    return _policy(gr.sem.grounded.problem, problem_name, nodes, optimal, stats or {})
 
 
 def _no_check() -> None:
@@ -91,7 +91,7 @@ def _policy_node(gr: Graph, i: int, n: int, moves: list[PolicyMove]) -> PolicyNo
     of its state (docs/policy-format.md; the agendas with partially ordered blocks as
     ``{a | b}``, §1), its value left 0 (see :func:`_policy`)."""
     sem = gr.sem
-    grounded = sem.g
+    grounded = sem.grounded
     es: EState = gr.states[n]
     t = es.true
     div = 0

@@ -96,8 +96,8 @@ class Symmetry:
     A permutation is a tuple giving each movable object's image; permutations are interned
     (:meth:`pid`), 0 being the identity."""
 
-    def __init__(self, g: Grounded, classes: list[list[str]]) -> None:
-        self.g = g
+    def __init__(self, grounded: Grounded, classes: list[list[str]]) -> None:
+        self.grounded = grounded
         self.objects = [o for cls in classes for o in cls]
         self.index = {o: i for i, o in enumerate(self.objects)}
         self.classes = [[self.index[o] for o in cls] for cls in classes]
@@ -113,7 +113,7 @@ class Symmetry:
         self._atom_parts: dict[int, tuple[str, tuple[str, ...], str]] = {}
         self._atom_roles: dict[int, tuple[tuple[int, int], ...]] = {}
         roles: dict[tuple[Any, ...], int] = {}
-        for i, a in enumerate(g.atoms):
+        for i, a in enumerate(grounded.atoms):
             parts = _split(a)
             roles_i = self._roles(parts, roles)
             if roles_i:
@@ -122,7 +122,7 @@ class Symmetry:
                 self._atom_roles[i] = roles_i
         self._task_parts: dict[int, tuple[str, tuple[str, ...], str]] = {}
         self._task_roles: dict[int, tuple[tuple[int, int], ...]] = {}
-        for t, name in enumerate(g.task_names):
+        for t, name in enumerate(grounded.task_names):
             parts = _split(name)
             roles_t = self._roles(parts, roles)
             if roles_t:
@@ -130,6 +130,11 @@ class Symmetry:
                 self._task_roles[t] = roles_t
         self._sig: dict[int, list[list[int]]] = {}
         self._ag_sig: dict[Agenda, list[list[tuple[int, int]]]] = {}
+
+    @property
+    def g(self) -> Grounded:
+        """The ground problem, by its older name (:attr:`grounded`)."""
+        return self.grounded
 
     def _roles(self, parts: tuple[str, tuple[str, ...], str],
                roles: dict[tuple[Any, ...], int]) -> tuple[tuple[int, int], ...]:
@@ -191,7 +196,7 @@ class Symmetry:
         m = self._atom_maps.get(pid)
         if m is None:
             ren = self.rename(pid)
-            idx = self.g.atom_index
+            idx = self.grounded.atom_index
             m = {}
             for i, parts in self._atom_parts.items():
                 j = idx[self._name_map(parts, ren)]
@@ -204,12 +209,12 @@ class Symmetry:
         m = self._task_maps.get(pid)
         if m is None:
             ren = self.rename(pid)
-            idx = self.g.task_index
+            idx = self.grounded.task_index
             m = {}
             for t, parts in self._task_parts.items():
                 u = idx.get(self._name_map(parts, ren))
                 if u is None:
-                    raise NotSymmetric(f"task {self.g.task_names[t]} has no image")
+                    raise NotSymmetric(f"task {self.grounded.task_names[t]} has no image")
                 if u != t:
                     m[t] = u
             self._task_maps[pid] = m
@@ -336,9 +341,9 @@ class Symmetry:
 
 
 # -- detection ----------------------------------------------------------------------------------
-def fixed_objects(g: Grounded) -> set[str]:
+def fixed_objects(grounded: Grounded) -> set[str]:
     """Objects the problem names (docs/semantics.md §3): never renamed."""
-    p = g.problem
+    p = grounded.problem
     out = set(p.domain.constants)
     names: list[str] = []
     for _, args in [*p.robot_agenda, *p.human_agenda]:
@@ -356,19 +361,19 @@ def fixed_objects(g: Grounded) -> set[str]:
     return out
 
 
-def detect(g: Grounded) -> Symmetry | None:
+def detect(grounded: Grounded) -> Symmetry | None:
     """The classes of interchangeable objects of ``g`` (docs/semantics.md §3), or None when
     there is none (or the problem uses a feature the reduction does not cover: partially
     ordered methods; a model too large to ground ahead, ``[limits] ground_ahead``)."""
-    models = _models(g)
+    models = _models(grounded)
     if any(m.lazy for m in models):  # grounded on demand: the whole model is not known
         return None
     for m in models:
         for ms in m.methods.values():
             if any(x.order is not None for x in ms):
                 return None
-    fixed = fixed_objects(g)
-    p = g.problem
+    fixed = fixed_objects(grounded)
+    p = grounded.problem
     by_type: dict[str, list[str]] = {}
     for t, objs in p.objects.items():
         for o in objs:
@@ -379,8 +384,8 @@ def detect(g: Grounded) -> Symmetry | None:
         return None
     # a Symmetry over every candidate gives the renamings to test; the real one is built on
     # the classes found
-    trial = Symmetry(g, cands)
-    check = _Checker(g, trial, models)
+    trial = Symmetry(grounded, cands)
+    check = _Checker(grounded, trial, models)
     classes: list[list[str]] = []
     for cand in cands:
         found: list[list[str]] = []
@@ -394,99 +399,126 @@ def detect(g: Grounded) -> Symmetry | None:
         classes.extend(c for c in found if len(c) > 1)
     if not classes:
         return None
-    return Symmetry(g, classes)
+    return Symmetry(grounded, classes)
 
 
-def _models(g: Grounded) -> list[GModel]:
-    ms = [g.robot, g.human]
-    if g.robot_seen_by_human is not g.robot:
-        ms.append(g.robot_seen_by_human)
+def _models(grounded: Grounded) -> list[GModel]:
+    ms = [grounded.robot, grounded.human]
+    if grounded.robot_seen_by_human is not grounded.robot:
+        ms.append(grounded.robot_seen_by_human)
     return ms
 
 
 class _Checker:
     """Whether swapping two objects maps the ground problem onto itself."""
 
-    def __init__(self, g: Grounded, sym: Symmetry, models: list[GModel]) -> None:
-        self.g, self.sym, self.models = g, sym, models
-        self.formula_of = {id(fn): f for f, fn in g.fns.items()}
+    def __init__(self, grounded: Grounded, sym: Symmetry, models: list[GModel]) -> None:
+        self.grounded, self.sym, self.models = grounded, sym, models
+        self.formula_of = {id(fn): f for f, fn in grounded.fns.items()}
 
     def swap(self, a: str, b: str) -> bool:
+        """Return whether swapping ``a`` and ``b`` is an automorphism (§3, "Symmetry"): the
+        problem's data (:meth:`_same_problem`) and every model (:meth:`_same_model`) map
+        onto themselves."""
         sym = self.sym
         p = list(range(len(sym.objects)))
         i, j = sym.index[a], sym.index[b]
         p[i], p[j] = j, i
         pid = sym.pid(tuple(p))
         try:
-            amap, tmap = sym.atom_map(pid), sym.task_map(pid)
-            return self._same(pid, amap, tmap)
+            ren = _Renamed(self, pid, sym.atom_map(pid), sym.task_map(pid))
+            return self._same_problem(ren) and all(self._same_model(ren, model)
+                                                   for model in self.models)
         except (KeyError, NotSymmetric):
             return False
 
-    def _same(self, pid: int, amap: dict[int, int], tmap: dict[int, int]) -> bool:
-        g, sym = self.g, self.sym
-
-        def st(s: int) -> int:
-            return sym.state(pid, s)
-
-        def ag(a: Agenda) -> Agenda:
-            return sym.agenda(pid, a)
-
-        def f(x: Formula | None, mapped: bool = True) -> object:
-            return _norm(x, amap if mapped else {})
-
-        def fn(x: Callable[[int], bool], mapped: bool = True) -> object:
-            form = self.formula_of.get(id(x))
-            if form is None:
-                raise NotSymmetric("an uncompiled condition")
-            return f(form, mapped)
-
-        if st(g.init) != g.init or ag(g.robot_agenda) != g.robot_agenda \
-                or ag(g.human_agenda) != g.human_agenda:
+    def _same_problem(self, ren: _Renamed) -> bool:
+        """Return whether the renaming maps the initial state, the agendas, the belief
+        worlds, the observability masks and groups, the units, co-presence and the goal
+        onto themselves."""
+        grounded, st, ag, f, fn = self.grounded, ren.state, ren.agenda, ren.formula, ren.condition
+        if st(grounded.init) != grounded.init \
+                or ag(grounded.robot_agenda) != grounded.robot_agenda \
+                or ag(grounded.human_agenda) != grounded.human_agenda:
             return False
-        if sorted((st(s), ag(a)) for s, a in g.beliefs) != sorted(g.beliefs):
+        if sorted((st(s), ag(a)) for s, a in grounded.beliefs) != sorted(grounded.beliefs):
             return False
-        for mask in (g.observable_mask, g.inferable_mask, g.hidden_mask, g.multi_mask):
+        for mask in (grounded.observable_mask, grounded.inferable_mask, grounded.hidden_mask,
+                     grounded.multi_mask):
             if st(mask) != mask:
                 return False
-        if {st(u) for u in g.var_units} != set(g.var_units):
+        if {st(u) for u in grounded.var_units} != set(grounded.var_units):
             return False
-        if {(st(u), k) for u, k in g.counter_max.items()} != set(g.counter_max.items()):
+        counters = set(grounded.counter_max.items())
+        if {(st(u), k) for u, k in grounded.counter_max.items()} != counters:
             return False
-        vis = Counter((fn(v), st(mask)) for v, mask in g.visible)
-        if vis != Counter((fn(v, False), mask) for v, mask in g.visible):
+        vis = Counter((fn(v), st(mask)) for v, mask in grounded.visible)
+        if vis != Counter((fn(v, False), mask) for v, mask in grounded.visible):
             return False
-        if f(g.copresent_f) != f(g.copresent_f, False) or f(g.goal_f) != f(g.goal_f, False):
-            return False
-        for m in self.models:
-            for t, op in m.ops.items():
-                o2 = m.ops.get(tmap.get(t, t))
-                if o2 is None or op.cost != o2.cost or st(op.add) != o2.add \
-                        or st(op.dele) != o2.dele or f(op.pre_f) != f(o2.pre_f, False) \
-                        or f(op.done_f) != f(o2.done_f, False):
-                    return False
-                c1 = Counter((fn(c), st(a), st(d)) for c, a, d in op.cond)
-                c2 = Counter((fn(c, False), a, d) for c, a, d in o2.cond)
-                if c1 != c2:
-                    return False
-            for t, ms in m.methods.items():
-                ms2 = m.methods.get(tmap.get(t, t))
-                if ms2 is None:
-                    return False
-                k1 = Counter((f(x.pre_f), ag(x.subtasks), x.order) for x in ms)
-                k2 = Counter((f(x.pre_f, False), x.subtasks, x.order) for x in ms2)
-                if k1 != k2:
-                    return False
-            for t, (df, _) in m.done.items():
-                d2 = m.done.get(tmap.get(t, t))
-                if d2 is None or f(df) != f(d2[0], False):
-                    return False
-            for t in m.ops.keys() | m.methods.keys() | m.done.keys():
-                u = tmap.get(t, t)
-                if (t in m.ops, t in m.methods, t in m.done) != \
-                        (u in m.ops, u in m.methods, u in m.done):
-                    return False
+        return (f(grounded.copresent_f) == f(grounded.copresent_f, False)
+                and f(grounded.goal_f) == f(grounded.goal_f, False))
+
+    def _same_model(self, ren: _Renamed, model: GModel) -> bool:
+        """Return whether the renaming maps ``model``'s ground operators (precondition,
+        effects, cost, done-condition), methods (precondition, subtasks, order) and
+        done-conditions onto the renamed tasks' own."""
+        st, ag, f, fn, tmap = ren.state, ren.agenda, ren.formula, ren.condition, ren.tmap
+        for t, op in model.ops.items():
+            o2 = model.ops.get(tmap.get(t, t))
+            if o2 is None or op.cost != o2.cost or st(op.add) != o2.add \
+                    or st(op.dele) != o2.dele or f(op.pre_f) != f(o2.pre_f, False) \
+                    or f(op.done_f) != f(o2.done_f, False):
+                return False
+            c1 = Counter((fn(c), st(a), st(d)) for c, a, d in op.cond)
+            c2 = Counter((fn(c, False), a, d) for c, a, d in o2.cond)
+            if c1 != c2:
+                return False
+        for t, methods in model.methods.items():
+            methods2 = model.methods.get(tmap.get(t, t))
+            if methods2 is None:
+                return False
+            k1 = Counter((f(x.pre_f), ag(x.subtasks), x.order) for x in methods)
+            k2 = Counter((f(x.pre_f, False), x.subtasks, x.order) for x in methods2)
+            if k1 != k2:
+                return False
+        for t, (df, _) in model.done.items():
+            d2 = model.done.get(tmap.get(t, t))
+            if d2 is None or f(df) != f(d2[0], False):
+                return False
+        for t in model.ops.keys() | model.methods.keys() | model.done.keys():
+            u = tmap.get(t, t)
+            if (t in model.ops, t in model.methods, t in model.done) != \
+                    (u in model.ops, u in model.methods, u in model.done):
+                return False
         return True
+
+
+class _Renamed:
+    """One candidate renaming ``pid`` applied to the parts of a ground problem (its atom
+    and task maps ``amap`` and ``tmap``)."""
+
+    def __init__(self, checker: _Checker, pid: int, amap: dict[int, int],
+                 tmap: dict[int, int]) -> None:
+        self.checker, self.pid, self.amap, self.tmap = checker, pid, amap, tmap
+
+    def state(self, s: int) -> int:
+        """Return the state ``s`` renamed."""
+        return self.checker.sym.state(self.pid, s)
+
+    def agenda(self, a: Agenda) -> Agenda:
+        """Return the agenda ``a`` renamed."""
+        return self.checker.sym.agenda(self.pid, a)
+
+    def formula(self, x: Formula | None, mapped: bool = True) -> object:
+        """Return ``x`` as a comparable value, renamed unless ``mapped`` is False."""
+        return _norm(x, self.amap if mapped else {})
+
+    def condition(self, x: Callable[[int], bool], mapped: bool = True) -> object:
+        """Return the compiled condition ``x`` as a comparable value (its formula)."""
+        form = self.checker.formula_of.get(id(x))
+        if form is None:
+            raise NotSymmetric("an uncompiled condition")
+        return self.formula(form, mapped)
 
 
 def _norm(f: Formula | None, amap: dict[int, int]) -> object:
@@ -514,8 +546,8 @@ class SymSemantics(Semantics):
     canonical states may not stand for the renamed states (the planner then solves again
     without symmetry)."""
 
-    def __init__(self, g: Grounded, sym: Symmetry) -> None:
-        super().__init__(g)
+    def __init__(self, grounded: Grounded, sym: Symmetry) -> None:
+        super().__init__(grounded)
         self.sym = sym
         self.watch = True
         self.unsafe = ""
@@ -534,7 +566,7 @@ class SymSemantics(Semantics):
         an interchangeable object, a renaming may reorder them: unsafe."""
         varying = 0
         count = 0
-        for u in self.g.units(mask):
+        for u in self.grounded.units(mask):
             part = u & mask
             first = worlds[0][0] & part
             if any(s & part != first for s, _ in worlds):
@@ -562,26 +594,26 @@ class SymSemantics(Semantics):
         state has the same canonical form, whichever set a renamed state picks by name, its
         ``inform`` leads to a renaming of the same state, of the same value (extraction then
         takes the real state's own set)."""
-        g, t = self.g, es.true
+        grounded, t = self.grounded, es.true
         states = states_of(es.worlds)
         div = 0
         for s in states:
             div |= s ^ t
-        cands = g.units(div)
-        size = len(g.units(chosen))
+        cands = grounded.units(div)
+        size = len(grounded.units(chosen))
 
         def valid(w2: Worlds, want_r: bool) -> bool:
             return self.fixes(es, w2, want_r, plan)
 
         def rank(m: int, combo: Iterable[int]) -> tuple[int, int]:
             w2 = self.observe(t, es.worlds, m)
-            return len(w2), -sum(1 for u in combo if t & u or u in g.unit_names)
+            return len(w2), -sum(1 for u in combo if t & u or u in grounded.unit_names)
 
         w_chosen = self.observe(t, es.worlds, chosen)
         want_r = valid(w_chosen, True)
         if not want_r and not valid(w_chosen, False):
             return True  # not understood: be safe
-        best = rank(chosen, g.units(chosen))
+        best = rank(chosen, grounded.units(chosen))
         movable = self.sym.movable_mask
         key: EState | None = None
         for combo in combinations(cands, size):

@@ -60,7 +60,7 @@ def compute_values(gr: Graph, root: int, objective: Objective | None = None,
                    budget: Budget | None = None) -> Values:
     """§7: the values of ``gr`` under ``objective`` (default: the problem's) and the robot's
     choice at every node of the chosen policy."""
-    obj = gr.sem.g.problem.objective if objective is None else objective
+    obj = gr.sem.grounded.problem.objective if objective is None else objective
     if budget is not None:
         budget.phase = "values (worst case)"
     worst, order = knuth(gr, budget)
@@ -252,12 +252,13 @@ class LiveWorst:
 
 def _positive_costs(gr: Graph) -> bool:
     """Whether every move but the robot's ``silence`` costs more than 0 (see LiveWorst)."""
-    g = gr.sem.g
-    c, d = g.problem.costs, g.problem.domain
+    grounded = gr.sem.grounded
+    c, d = grounded.problem.costs, grounded.problem.domain
+    models = ((grounded.robot, d.robot), (grounded.human, d.human))
     return (min(c.inform, c.ask, c.wait, c.pass_) > 0
-            and all(op.cost > 0 for m in (g.robot, g.human) for op in m.ops.values())
+            and all(op.cost > 0 for model, _ in models for op in model.ops.values())
             and all(c.actions.get(name, op.cost) > 0  # on demand: the ops not grounded yet
-                    for m, lifted in ((g.robot, d.robot), (g.human, d.human)) if m.lazy
+                    for model, lifted in models if model.lazy
                     for name, op in lifted.operators.items()))
 
 
