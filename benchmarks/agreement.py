@@ -4,9 +4,10 @@
         [--no-symmetry] [--walk-cap N]
     .venv/bin/python benchmarks/agreement.py --show SEED      # print one seed's problem
 
-Solves the random problems of seeds start..start+n-1 (``ehatp.tools.randomgen``), validates
+Solves the random problems of seeds start..start+n-1 (``ehatp.experiments.randomgen``), validates
 every policy the planner returns with the independent validator, executes it (walks it on every
-branch, up to a cap, through the Executor: ``ehatp.tools.walk``), looks in its file for a human
+branch, up to a cap, through the Executor: ``ehatp.run.walk``; the check is
+``ehatp.experiments.agreement``), looks in its file for a human
 node with two moves of one label (a branch on a choice the robot cannot see, docs/semantics.md
 §3), and on one seed in ten solves again (and declared in reverse order), expecting
 byte-identical policy JSON. A search stopped by its limits is counted apart (skipped). Prints
@@ -27,8 +28,7 @@ from pathlib import Path
 # run the checkout this file lives in, whatever is installed
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "src"))
 
-from ehatp.search import symmetry  # noqa: E402
-from ehatp.tools import randomgen  # noqa: E402
+from ehatp.experiments import agreement, randomgen  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -45,49 +45,59 @@ def main(argv: list[str] | None = None) -> int:
                     help="print the problem of SEED and what checking it gives, then exit")
     ap.add_argument("--no-symmetry", action="store_true",
                     help="search without the symmetry reduction (docs/semantics.md §3)")
-    ap.add_argument("--walk-cap", type=int, default=randomgen.WALK_CAP, metavar="N",
+    ap.add_argument("--walk-cap", type=int, default=agreement.WALK_CAP, metavar="N",
                     help="branches of a policy executed at most (default "
-                         f"{randomgen.WALK_CAP})")
+                         f"{agreement.WALK_CAP})")
     args = ap.parse_args(argv)
-    if args.no_symmetry:  # the workers are forked: they inherit it
-        symmetry.OVERRIDE = False
     if args.n < 1:
         ap.error("--n must be at least 1")
     if args.jobs < 1:
         ap.error("--jobs must be at least 1")
     if args.walk_cap < 1:
         ap.error("--walk-cap must be at least 1")
-    randomgen.WALK_CAP = args.walk_cap  # the workers are forked: they inherit it
+    symmetry = False if args.no_symmetry else None  # None: as each problem says
 
     if args.show is not None:
-        print(randomgen.draw(args.show).describe())
-        o = randomgen.check(args.show, determinism=True)
-        print(f"\n{o.kind} (planner: {o.status or '-'}) {o.detail}")
-        if o.executed:
-            print(f"executed: {o.branches} branch(es){' (capped)' if o.capped else ''}"
-                  + (f"; fails: {o.unexecutable}" if o.unexecutable else ", every one to the goal"))
-        if o.hidden_choice:
-            print(f"branches on a hidden choice: {o.hidden_choice}")
-        return 1 if o.failed else 0
+        return show(args.show, args.walk_cap, symmetry)
 
     seeds = range(args.start, args.start + args.n)
     tty = sys.stderr.isatty()
     done = 0
 
-    def progress(_: randomgen.Outcome) -> None:
+    def progress(_: agreement.Outcome) -> None:
         nonlocal done
         done += 1
         if tty and (done % 50 == 0 or done == args.n):
             print(f"\r\033[K{done}/{args.n}", end="", file=sys.stderr, flush=True)
 
     t0 = time.perf_counter()
-    outcomes = randomgen.run(seeds, jobs=args.jobs, on_result=progress)
+    outcomes = agreement.run(seeds, jobs=args.jobs, on_result=progress, walk_cap=args.walk_cap,
+                             symmetry=symmetry)
     elapsed = time.perf_counter() - t0
     if tty:
         print("\r\033[K", end="", file=sys.stderr, flush=True)
+    return report(outcomes, seeds, elapsed, args.jobs, args.walk_cap, args.verbose)
 
+
+def show(seed: int, walk_cap: int, symmetry: bool | None) -> int:
+    """Print the problem of ``seed`` and what checking it gives; return the exit code."""
+    print(randomgen.draw(seed).describe())
+    o = agreement.check(seed, determinism=True, walk_cap=walk_cap, symmetry=symmetry)
+    print(f"\n{o.kind} (planner: {o.status or '-'}) {o.detail}")
+    if o.executed:
+        print(f"executed: {o.branches} branch(es){' (capped)' if o.capped else ''}"
+              + (f"; fails: {o.unexecutable}" if o.unexecutable else ", every one to the goal"))
+    if o.hidden_choice:
+        print(f"branches on a hidden choice: {o.hidden_choice}")
+    return 1 if o.failed else 0
+
+
+def report(outcomes: list[agreement.Outcome], seeds: range, elapsed: float, jobs: int,
+           walk_cap: int, verbose: bool) -> int:
+    """Print every failing seed (every seed when ``verbose``), then the counts; return the
+    exit code."""
     for o in outcomes:
-        if args.verbose or o.failed:
+        if verbose or o.failed:
             det = " [determinism checked]" if o.checked_determinism else ""
             opts = f" {{{', '.join(o.options)}}}" if o.options else ""
             walked = (f", executed {o.branches} branch(es)" + (" (capped)" if o.capped else "")
@@ -99,19 +109,19 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"  non-executable: {o.unexecutable}")
             if o.hidden_choice:
                 print(f"  branches on a hidden choice: {o.hidden_choice}")
-    c = randomgen.summary(outcomes)
+    c = agreement.summary(outcomes)
     checked = sum(o.checked_determinism for o in outcomes)
     failures = sum(o.failed for o in outcomes)
     plain = sum(1 for o in outcomes if o.failed and not o.options)
     walk_time = sum(o.walk_seconds for o in outcomes)
     branches = sum(o.branches for o in outcomes)
-    print(f"{args.n} problems (seeds {seeds.start}..{seeds.stop - 1}) in {elapsed:.1f} s "
-          f"on {args.jobs} job(s); determinism checked on {checked}")
+    print(f"{len(seeds)} problems (seeds {seeds.start}..{seeds.stop - 1}) in {elapsed:.1f} s "
+          f"on {jobs} job(s); determinism checked on {checked}")
     print(f"solved {c['solved']}, unsolvable {c['unsolvable']}, limit {c['limit']}, "
           f"crashes {c['crash']}, disagreements {c['disagreement']}, "
           f"nondeterministic {c['nondeterministic']}")
     print(f"executed {c['executed']} policies ({branches} branches, {c['capped']} stopped at "
-          f"{randomgen.WALK_CAP} branches; {walk_time:.1f} s of the workers' time), "
+          f"{walk_cap} branches; {walk_time:.1f} s of the workers' time), "
           f"non-executable {c['non-executable']}, "
           f"branches on a hidden choice {c['hidden-choice']}")
     print("OK: planner and validator agree, every policy executes" if not failures else

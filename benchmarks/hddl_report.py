@@ -3,8 +3,9 @@
     .venv/bin/python benchmarks/hddl_report.py [--timeout S] [--max-states N] [--jobs N]
         [--only PATTERN ...] [--json FILE] [--expects nothing|plan]
 
-Runs ``ehatp.tools.hddl.check_domain`` on every HDDL domain unified-planning ships with its
-tests (the IPC 2020 HTN track's, one problem each) and on the small ones of tests/data/hddl:
+Runs ``ehatp.experiments.hddl_report.check_domain`` on every HDDL domain unified-planning ships
+with its tests (the IPC 2020 HTN track's, one problem each) and on the small ones of
+tests/data/hddl:
 import (the domain as the robot's HTN, the human with an empty agenda, everything observable,
 always together; by default the robot alone, the human following no plan of it, and with
 ``--expects plan`` a human who knows the robot's model), solve within ``--timeout`` seconds
@@ -32,7 +33,8 @@ from typing import Any
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "src"))
 
-from ehatp.tools import hddl  # noqa: E402
+from ehatp.experiments import hddl_report  # noqa: E402
+from ehatp.formats import hddl  # noqa: E402
 
 OWN = ROOT / "tests" / "data" / "hddl"
 
@@ -53,22 +55,23 @@ def _child(conn: Connection, name: str, dom: Path, prob: Path, timeout: float,
     try:
         hddl.import_hddl(dom, prob).problem()
         conn.send(("imported", None))
-        row = hddl.check_domain(name, dom, prob, timeout=timeout, max_states=max_states,
+        row = hddl_report.check_domain(name, dom, prob, timeout=timeout, max_states=max_states,
                                 expects=expects)
     except Exception as e:  # noqa: BLE001 - a crash is a finding, reported like the others
-        row = hddl.Row(name, "unmapped", f"crash: {type(e).__name__}: {hddl.report_reason(e)}")
+        row = hddl_report.Row(name, "unmapped",
+                              f"crash: {type(e).__name__}: {hddl_report.report_reason(e)}")
     conn.send(("row", row))
 
 
 def run_all(todo: list[tuple[str, Path, Path]], timeout: float, max_states: int, jobs: int,
-            expects: str = "nothing", grace: float = 180.0) -> Iterator[hddl.Row]:
+            expects: str = "nothing", grace: float = 180.0) -> Iterator[hddl_report.Row]:
     """Each domain in a child process of its own, ``jobs`` at a time, in order. A child
     still running ``grace`` seconds after its time limit (validating a policy takes as
     long as solving it, and is not limited) is killed, and its row says so."""
     ctx = multiprocessing.get_context("fork")
     pending = list(todo)
     running: list[tuple[str, Any, Connection, float, list[bool]]] = []
-    done: dict[str, hddl.Row] = {}
+    done: dict[str, hddl_report.Row] = {}
     order = [n for n, _, _ in todo]
     nxt = 0
     while pending or running:
@@ -98,7 +101,7 @@ def run_all(todo: list[tuple[str, Path, Path]], timeout: float, max_states: int,
                 if proc.is_alive():
                     proc.kill()
                 proc.join()
-                row = hddl.Row(name, "mapped" if imported[0] else "unmapped",
+                row = hddl_report.Row(name, "mapped" if imported[0] else "unmapped",
                                f"still grounding or solving {time.monotonic() - start:.0f} s "
                                f"after starting (time limit {timeout:g} s): stopped"
                                if late else f"the child process died (exit {proc.exitcode})",
@@ -127,14 +130,14 @@ def main(argv: list[str] | None = None) -> int:
                          "expects): nothing, the robot alone (default); plan, a human who "
                          "knows the robot's model and follows its possible methods")
     args = ap.parse_args(argv)
-    shipped = hddl.domains_shipped()
+    shipped = hddl_report.domains_shipped()
     if not shipped:
         print("unified-planning is not installed (pip install 'ehatp[hddl]'): only the "
               "domains of tests/data/hddl are run", file=sys.stderr)
     todo = [(f"ipc/{n}", d, p) for n, d, p in shipped] + own_domains()
     if args.only:
         todo = [t for t in todo if any(fnmatch.fnmatch(t[0], f"*{pat}*") for pat in args.only)]
-    rows: list[hddl.Row] = []
+    rows: list[hddl_report.Row] = []
     for row in run_all(todo, args.timeout, args.max_states, args.jobs, args.expects):
         rows.append(row)
         cost = f"cost {row.cost}, " if row.cost is not None else ""

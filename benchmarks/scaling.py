@@ -4,7 +4,7 @@
         [--max-memory SIZE] [--repeat N] [--json FILE] [--plot FILE.png] [--baseline FILE.json]
         [--src DIR] [--versus DIR]
 
-Same grid and table as ``ehatp bench scaling`` (``ehatp.tools.bench``). ``--src DIR`` times
+Same grid and table as ``ehatp bench scaling`` (``ehatp.experiments.bench``). ``--src DIR`` times
 another checkout's ``src`` directory with this checkout's grid (how docs/benchmarks.md measured
 "before"); ``--versus DIR`` runs every instance with both, alternately (``DIR`` first, then
 this checkout, run after run) so that a noisy machine's drift falls on both alike, and prints
@@ -25,8 +25,8 @@ from typing import Any
 SRC = str(Path(__file__).resolve().parent.parent / "src")
 sys.path.insert(0, SRC)
 
+from ehatp.experiments import bench  # noqa: E402
 from ehatp.model.problem import parse_size  # noqa: E402
-from ehatp.tools import bench  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -29,7 +29,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ehatp.tools.examples import examples_dir
+from ehatp.experiments.examples import examples_dir
 
 GRID = """\
 # 2^8 = 256 combinations per problem file
@@ -49,7 +49,7 @@ CUT = 400
 def ehatp(*args: str | Path) -> tuple[int, float, str, str]:
     """Run ``ehatp`` (the console script beside this Python); exit code, seconds, output."""
     script = Path(sys.executable).with_name("ehatp")
-    cmd = [str(script)] if script.exists() else [sys.executable, "-m", "ehatp.tools.cli"]
+    cmd = [str(script)] if script.exists() else [sys.executable, "-m", "ehatp.cli"]
     t0 = time.perf_counter()
     p = subprocess.run([*cmd, *map(str, args)], capture_output=True, text=True)
     return p.returncode, time.perf_counter() - t0, p.stdout, p.stderr

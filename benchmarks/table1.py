@@ -13,7 +13,7 @@ import json
 import sys
 from pathlib import Path
 
-from ehatp.tools.bench import format_table, run_table1
+from ehatp.experiments.bench import format_table, run_table1
 
 
 def main(argv: list[str] | None = None) -> int:

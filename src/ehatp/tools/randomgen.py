@@ -2,4 +2,4 @@
 
 from .._deprecated import moved
 
-moved(__name__, "ehatp.experiments.randomgen")
+moved(__name__, "ehatp.experiments.randomgen", "ehatp.experiments.agreement")

@@ -1,0 +1,212 @@
+"""The agreement check: planner, validator and executor on random problems
+(:mod:`ehatp.experiments.randomgen`). For one seed, :func:`check` solves the problem, validates
+the policy from its file text, looks in that file for a hidden choice, walks the policy on its
+branches through the Executor and (on a sample) solves again, and again with the problem
+declared in reverse order, expecting the same bytes. ``benchmarks/agreement.py`` and
+``tests/test_agreement.py`` run it on many seeds through :func:`run`.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import multiprocessing
+import time
+import traceback
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from ..formats.policy import Policy
+from .randomgen import build, draw
+
+MAX_STATES = 20_000
+TIMEOUT = 4.0
+DETERMINISM_EVERY = 10
+WALK_CAP = 500
+"""Branches of one policy walked through the Executor at most (:func:`check`)."""
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What happened to one seed. ``kind``: solved | unsolvable | limit (the search stopped at
+    a limit: skipped) | crash (an exception) | disagreement (the validator rejects the
+    planner's policy) | nondeterministic (a second solve, or the problem declared in reverse
+    order, gives another policy). ``status`` is the planner's; ``detail`` the first line of the
+    validator's report or the exception, where it was raised; ``options`` the model options
+    the problem sets away from their defaults (:meth:`Spec.options`).
+
+    Every policy the planner returns is also *executed*: walked on its branches through the
+    Executor (``ehatp.run.walk``); ``branches`` is how many it walked to their end,
+    ``capped`` whether it stopped at :data:`WALK_CAP`, ``unexecutable`` the walk's failure
+    ("" when every branch reached the goal), and ``hidden_choice`` names a human node of the
+    policy file with two moves of one label (:func:`hidden_choices`). Either makes the seed
+    a failure, whatever its kind."""
+
+    seed: int
+    kind: str
+    status: str = ""
+    detail: str = ""
+    checked_determinism: bool = False
+    seconds: float = 0.0
+    options: tuple[str, ...] = ()  # the model options away from their defaults
+    executed: bool = False  # the policy was walked through the Executor
+    branches: int = 0
+    capped: bool = False
+    unexecutable: str = ""
+    hidden_choice: str = ""
+    walk_seconds: float = 0.0
+
+    @property
+    def failed(self) -> bool:
+        return self.kind in FAILURES or bool(self.unexecutable or self.hidden_choice)
+
+
+FAILURES = ("crash", "disagreement", "nondeterministic")
+KINDS = ("solved", "unsolvable", "limit", *FAILURES)
+EXECUTION = ("executed", "capped", "non-executable", "hidden-choice")
+"""The execution counts of :func:`summary`: policies walked, walks stopped at the cap, walks
+that failed, policies that branch on a hidden choice."""
+
+
+def _where(e: BaseException) -> str:
+    tb = traceback.extract_tb(e.__traceback__)
+    last = tb[-1] if tb else None
+    at = f" (at {last.filename.rsplit('/', 1)[-1]}:{last.lineno} in {last.name})" if last else ""
+    msg = str(e).splitlines()[0] if str(e) else ""
+    return f"{type(e).__name__}: {msg}{at}"
+
+
+def hidden_choices(policy: Policy) -> list[str]:
+    """The human nodes of ``policy`` (as read from its file) that cover two moves whose labels
+    are equal but for spaces: a robot sees the human's action, never its method
+    (docs/semantics.md §3), so it cannot tell such branches apart. One line per node."""
+    human = policy.agents.get("human")
+    out = []
+    for n in policy.nodes:
+        if n.to_move != human:
+            continue
+        seen: dict[str, int] = {}
+        for m in n.moves:
+            key = "".join(m.action.split())
+            if key in seen:
+                out.append(f"node {n.id}: {human} {m.action} twice (to nodes {seen[key]} and "
+                           f"{m.to})")
+                break
+            seen[key] = m.to
+    return out
+
+
+def check(seed: int, *, determinism: bool | None = None, max_states: int = MAX_STATES,
+          timeout: float = TIMEOUT, walk_cap: int = WALK_CAP,
+          symmetry: bool | None = None) -> Outcome:
+    """Solve the problem of ``seed``, validate any policy the planner returns, look in its file
+    for a hidden choice and walk it on up to ``walk_cap`` branches through the Executor, and
+    (when ``determinism``, by default for one seed in :data:`DETERMINISM_EVERY`) solve it again
+    and declared in reverse order, expecting byte-identical policy JSON. ``symmetry`` is
+    :func:`~ehatp.search.planner.solve`'s (None: as the problem says)."""
+    from ..check.validator import validate
+    from ..run.walk import walk_policy
+    from ..search.planner import solve
+
+    if determinism is None:
+        determinism = seed % DETERMINISM_EVERY == 0
+    start = time.perf_counter()
+    stage = "draw"
+    status = ""
+    options: tuple[str, ...] = ()
+    execution: dict[str, Any] = {}
+
+    def out(kind: str, detail: str = "", checked: bool = False) -> Outcome:
+        return Outcome(seed, kind, status, detail, checked, time.perf_counter() - start,
+                       options, **execution)
+
+    try:
+        spec = draw(seed)
+        options = spec.options()
+        stage = "build"
+        prob = build(spec)
+        stage = "solve"
+        r = solve(prob, max_states=max_states, timeout=timeout, symmetry=symmetry)
+        status = r.status
+        if r.policy is not None:
+            # from the policy's file text (format v2), as a user's validate would read it
+            text = r.policy.to_json()
+            stage = "validate"
+            report = validate(prob, Policy.from_dict(json.loads(text)))
+            stage = "hidden choice"
+            read = Policy.from_dict(json.loads(text))
+            hidden = hidden_choices(read)
+            stage = "walk"
+            t0 = time.perf_counter()
+            walk = walk_policy(prob, read, cap=walk_cap)
+            execution = {"executed": True, "branches": walk.branches, "capped": walk.capped,
+                         "unexecutable": "" if walk.ok else walk.message.splitlines()[0],
+                         "hidden_choice": "; ".join(hidden),
+                         "walk_seconds": time.perf_counter() - t0}
+            if not report.ok:
+                return out("disagreement", report.message.splitlines()[0])
+        if r.status in ("timeout", "state-limit"):
+            return out("limit", r.reason)
+        if r.status != "solved" and r.status != "unsolvable":
+            return out("crash", f"solve: unknown status {r.status!r}")
+        if determinism:
+            first = r.policy.to_json() if r.policy is not None else r.status
+            for rev in (False, True):
+                stage = "reverse" if rev else "re-solve"
+                again = solve(build(draw(seed), reverse=rev), max_states=max_states,
+                              timeout=timeout, symmetry=symmetry)
+                if again.status in ("timeout", "state-limit"):
+                    continue  # a limit hit is not comparable
+                second = again.policy.to_json() if again.policy is not None else again.status
+                if second != first:
+                    what = ("solving twice" if not rev else
+                            "declaring the problem in reverse order")
+                    return out("nondeterministic", f"{what} gives another result "
+                               f"({r.status} vs {again.status})", True)
+            stage = "done"
+        return out(r.status, r.reason.splitlines()[0] if r.reason else "", determinism)
+    except Exception as e:  # noqa: BLE001 - every exception is a finding
+        return out("crash", f"{stage}: {_where(e)}")
+
+
+def run(seeds: Iterable[int], *, jobs: int = 1,
+        on_result: Callable[[Outcome], None] | None = None,
+        walk_cap: int = WALK_CAP, symmetry: bool | None = None) -> list[Outcome]:
+    """:func:`check` every seed (``walk_cap`` and ``symmetry`` as there), on ``jobs``
+    processes; the outcomes sorted by seed."""
+    one = functools.partial(check, walk_cap=walk_cap, symmetry=symmetry)
+    seeds = list(seeds)
+    results: list[Outcome] = []
+
+    def collect(it: Iterator[Outcome]) -> None:
+        for o in it:
+            results.append(o)
+            if on_result is not None:
+                on_result(o)
+
+    if jobs <= 1 or len(seeds) <= 1:
+        collect(one(s) for s in seeds)
+    else:
+        # fork: the children share the parent's imports; one seed per task keeps load even
+        ctx = multiprocessing.get_context("fork")
+        with ctx.Pool(jobs) as pool:
+            collect(pool.imap_unordered(one, seeds, chunksize=1))
+    return sorted(results, key=lambda o: o.seed)
+
+
+def summary(outcomes: Sequence[Outcome]) -> dict[str, int]:
+    """Counts by kind (every kind present, in :data:`KINDS` order), then the execution counts
+    of :data:`EXECUTION`."""
+    counts = dict.fromkeys((*KINDS, *EXECUTION), 0)
+    for o in outcomes:
+        counts[o.kind] += 1
+        counts["executed"] += o.executed
+        counts["capped"] += o.capped
+        counts["non-executable"] += bool(o.unexecutable)
+        counts["hidden-choice"] += bool(o.hidden_choice)
+    return counts
+
+
+__all__ = ["DETERMINISM_EVERY", "EXECUTION", "FAILURES", "KINDS", "MAX_STATES", "TIMEOUT",
+           "WALK_CAP", "Outcome", "check", "hidden_choices", "run", "summary"]
