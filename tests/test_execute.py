@@ -9,6 +9,7 @@ import json
 import subprocess
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import pytest
@@ -263,11 +264,34 @@ def test_replan_within_the_opening_keeps_it() -> None:
 # --- the explorer in a notebook -----------------------------------------------------------------
 
 
-def test_policy_repr_html_is_the_explorer_in_an_iframe() -> None:
+def test_the_notebook_html_of_a_policy_is_the_explorer_in_an_iframe() -> None:
     policy = solved(CUBES / "p2.toml").policy
-    html = policy._repr_html_()
+    html = ehatp.explore(policy)._repr_html_()
     assert html.startswith("<iframe") and html.rstrip().endswith("</iframe>")
     assert 'sandbox="allow-scripts"' in html
     assert "&lt;script" in html  # the page is escaped inside srcdoc, not live in the notebook
     assert "<script" not in html
-    assert html == policy._repr_html_()  # deterministic
+    assert html == ehatp.explore(policy)._repr_html_()  # deterministic
+
+
+def test_inside_ipython_a_policy_shows_itself_as_the_explorer(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """`import ehatp` in a Jupyter kernel registers an HTML formatter for Policy by name
+    (docs/notebook.md); outside IPython it does nothing."""
+    registered: dict[tuple[str, str], Any] = {}
+
+    class Formatter:
+        def for_type_by_name(self, module: str, name: str, show: Any) -> None:
+            registered[module, name] = show
+
+    shell = SimpleNamespace(display_formatter=SimpleNamespace(
+        formatters={"text/html": Formatter()}))
+    monkeypatch.setitem(sys.modules, "IPython", SimpleNamespace(get_ipython=lambda: shell))
+    ehatp._show_policies_in_notebooks()
+    show = registered[ehatp.Policy.__module__, "Policy"]
+    policy = solved(CUBES / "p2.toml").policy
+    assert show(policy) == ehatp.explore(policy)._repr_html_()
+    registered.clear()
+    monkeypatch.setitem(sys.modules, "IPython", SimpleNamespace(get_ipython=lambda: None))
+    ehatp._show_policies_in_notebooks()
+    assert registered == {}
