@@ -595,7 +595,7 @@ class Replay:
                           f"{[o.label for o in options]}")
                 self.end(node.id)
                 continue
-            st = next((m for m in matches if m not in used), matches[0])
+            st = next((option for option in matches if option not in used), matches[0])
             if st in used:
                 self.fail(cpath, f"node {child.id} (H {move.action}): duplicate human "
                           "branch: this option is already covered")

@@ -111,8 +111,8 @@ def _num(x: Fraction) -> str:
 
 
 
-def _bits(m: int) -> list[int]:
-    return [i for i in range(m.bit_length()) if m >> i & 1]
+def _bits(mask: int) -> list[int]:
+    return [i for i in range(mask.bit_length()) if mask >> i & 1]
 
 
 def _dedupe(xs: Iterable[_T]) -> list[_T]:
@@ -193,9 +193,9 @@ class Rules:
                 return
             if t in busy:
                 return  # a loop: refined again inside its own refinement
-            for m in model.methods.get(t, ()):
-                if m.pre(s):
-                    go(self.subtasks(m) + rest, depth + 1, (*still, (t, rest)))
+            for method in model.methods.get(t, ()):
+                if method.pre(s):
+                    go(self.subtasks(method) + rest, depth + 1, (*still, (t, rest)))
 
         go(agenda, 0, ())
         return _dedupe(out)
@@ -260,24 +260,25 @@ class Rules:
                 return
             if t in busy:
                 return  # a loop: refined again inside its own refinement
-            for m in model.methods.get(t, ()):
-                ok = frozenset(s for s in ws if m.pre(s))
+            for method in model.methods.get(t, ()):
+                ok = frozenset(s for s in ws if method.pre(s))
                 if ok:
-                    go(self.subtasks(m) + rest, ok, conds if ok == ws else (*conds, m.pre_f),
-                       depth + 1, (*still, (t, rest)))
+                    go(self.subtasks(method) + rest, ok,
+                       conds if ok == ws else (*conds, method.pre_f), depth + 1,
+                       (*still, (t, rest)))
 
         go(agenda, states, conds0, 0)
         return _dedupe(out)
 
     # -- §1: partial order ---------------------------------------------------------------------
 
-    def subtasks(self, m: GMethod) -> Agenda:
+    def subtasks(self, method: GMethod) -> Agenda:
         """§1: a method's subtasks as an agenda: as listed, or (partially ordered) in canonical
         form."""
-        if m.order is None:
-            return m.subtasks
-        pairs = {(i, j) for j, preds in enumerate(m.order) for i in _bits(preds)}
-        return self.canon(list(m.subtasks), pairs)
+        if method.order is None:
+            return method.subtasks
+        pairs = {(i, j) for j, preds in enumerate(method.order) for i in _bits(preds)}
+        return self.canon(list(method.subtasks), pairs)
 
     def canon(self, tasks: Sequence[int], before: set[tuple[int, int]]) -> Agenda:
         """§1: ``tasks`` under the order ``before`` in canonical form (:meth:`Network.canon`)."""
@@ -302,10 +303,10 @@ class Rules:
         its state variable (one per value) or of its counter (one per bit)."""
         return self.grounded.unit_of.get(i, 1 << i)
 
-    def units(self, m: int) -> list[int]:
+    def units(self, mask: int) -> list[int]:
         """§2, §5: the units the atoms of ``m`` belong to, in index order."""
         out: list[int] = []
-        for i in _bits(m):
+        for i in _bits(mask):
             u = self.unit(i)
             if u not in out:
                 out.append(u)
@@ -372,10 +373,10 @@ class Rules:
     def attributed(self, agenda: Agenda) -> Agenda:
         """The robot agenda as the human can hold it (§4): the tasks its model of the
         robot knows; a task M_R^H has no operator, method or done-condition for is dropped."""
-        m = self.grounded.robot_seen_by_human
+        model = self.grounded.robot_seen_by_human
 
         def knows(x: int) -> bool:  # an operator, a method or a done-condition for it
-            return x in m.ops or bool(m.methods.get(x)) or x in m.done
+            return x in model.ops or bool(model.methods.get(x)) or x in model.done
 
         out: list[int | Block] = []
         for t in agenda:
@@ -404,11 +405,11 @@ class Rules:
     def set_inferable(self, worlds: Worlds, old: int, new: int) -> Worlds:
         """§4: the inferable atoms an action changed in T are set in every world (a state
         variable or a counter whole)."""
-        m = 0
+        mask = 0
         for u in self.units(old ^ new):
-            m |= u
-        m &= self.grounded.inferable_mask
-        return frozenset(((s & ~m) | (new & m), ag) for s, ag in worlds)
+            mask |= u
+        mask &= self.grounded.inferable_mask
+        return frozenset(((s & ~mask) | (new & mask), ag) for s, ag in worlds)
 
     def sees_robot_done(self, worlds: Worlds, true: int, robot: Agenda) -> Worlds:
         """§4, non-anticipating human: whenever co-present in T (the initial one included)

@@ -49,8 +49,8 @@ def values(rp: Replay, order: list[int] | None
         if turn is None or (turn == ROBOT and len(node.moves) != 1):
             continue
         parts: list[tuple[Fraction, Fraction, Fraction]] = []
-        for j, m in enumerate(node.moves):
-            w, v, cost = worst.get(m.to), mean.get(m.to), rp.step_cost.get((n, j))
+        for j, move in enumerate(node.moves):
+            w, v, cost = worst.get(move.to), mean.get(move.to), rp.step_cost.get((n, j))
             if w is None or v is None or cost is None:
                 break
             parts.append((cost + w, cost + v, rp.weight.get((n, j), Fraction(1))))
@@ -115,9 +115,9 @@ def check_summary(rp: Replay, order: list[int] | None) -> None:
     reach[0] = 1
     comms = leaves = 0
     for n in reversed(order):  # parents first
-        for m in nodes[n].moves:
-            reach[m.to] += reach[n]
-            if m.kind in COMMUNICATIONS or m.told:
+        for move in nodes[n].moves:
+            reach[move.to] += reach[n]
+            if move.kind in COMMUNICATIONS or move.told:
                 comms += reach[n]
         if not nodes[n].moves:
             leaves += reach[n]
@@ -143,10 +143,10 @@ def paths(rp: Replay) -> dict[int, list[str]]:
     stack = list(out)
     while stack:
         n = stack.pop()
-        for m in nodes[n].moves:
-            if 0 <= m.to < len(nodes) and m.to not in out:
-                out[m.to] = [*out[n], f"{m.agent} {m.action}"]
-                stack.append(m.to)
+        for move in nodes[n].moves:
+            if 0 <= move.to < len(nodes) and move.to not in out:
+                out[move.to] = [*out[n], f"{move.agent} {move.action}"]
+                stack.append(move.to)
     return out
 
 

@@ -61,14 +61,14 @@ class Call(NamedTuple):
     label: str
 
 
-def bits_of(m: int) -> list[int]:
+def bits_of(mask: int) -> list[int]:
     """The indices of the set bits of ``m``, lowest first (atoms of a mask, §2)."""
     out = []
     i = 0
-    while m:
-        if m & 1:
+    while mask:
+        if mask & 1:
             out.append(i)
-        m >>= 1
+        mask >>= 1
         i += 1
     return out
 
@@ -124,22 +124,22 @@ class Semantics:
             label = rest
         want = "".join(label.split())
         moves = self.moves(es)
-        if want == PASS and es.forced and not any(m.kind == PASS for m in moves):
+        if want == PASS and es.forced and not any(move.kind == PASS for move in moves):
             # §4: the fairness rule says such a pass need not be covered, not that it cannot
             # happen: an execution that met one is replayed from where it happened
             moves = self.moves(es._replace(forced=False))
-        found = next((m for m in moves if "".join(m.label.split()) == want), None)
+        found = next((move for move in moves if "".join(move.label.split()) == want), None)
         if found is None and want.endswith("]") and "[" in want:
             base, _, after = want[:-1].rpartition("[")
-            found = next((m for m in moves if "".join(m.label.split()) == base
-                          and m.child is not None and self._leaves(m.child) == after), None)
+            found = next((move for move in moves if "".join(move.label.split()) == base
+                          and move.child is not None and self._leaves(move.child) == after), None)
         if found is not None:
             if found.child is None:
                 raise ValueError(f"{label!r} fails here: {found.failure}")
             return found
         who = self.names[es.turn]
         raise ValueError(f"{label!r} is not a move of {who} here; options: "
-                         + ", ".join(m.label for m in moves))
+                         + ", ".join(move.label for move in moves))
 
     def trace_label(self, es: EState, move: Move) -> str:
         """§4: ``move``'s label as :meth:`follow` reads it back from ``es`` to this very move:
@@ -147,7 +147,8 @@ class Semantics:
         has the same label and leads elsewhere."""
         if move.agent != ROBOT or move.child is None:  # human labels are unique (§4)
             return move.label
-        if not any(m.label == move.label and m.child != move.child for m in self.moves(es)):
+        if not any(other.label == move.label and other.child != move.child
+                   for other in self.moves(es)):
             return move.label
         return f"{move.label} [{', '.join(self.net.names_of(move.child.robot_agenda))}]"
 
@@ -261,11 +262,12 @@ class Semantics:
         """§4: the robot agenda as the human holds it after revising its beliefs: the tasks of
         ``agenda`` its model of the robot (M_R^H) knows. A task M_R^H has no operator, method
         or done-condition for is dropped: the human can expect nothing of it."""
-        m = self.grounded.robot_seen_by_human
-        if m is self.grounded.robot:
+        model = self.grounded.robot_seen_by_human
+        if model is self.grounded.robot:
             return agenda
         return self.net.keep(agenda,
-                             lambda t: t in m.ops or bool(m.methods.get(t)) or t in m.done)
+                             lambda t: (t in model.ops or bool(model.methods.get(t))
+                                        or t in model.done))
 
     def successors(self, w: World) -> tuple[World, ...]:
         """The world itself (noop) and every event the human anticipates of the robot there."""
@@ -357,16 +359,17 @@ class Semantics:
             # §5: what is said with a move is judged on the state the move leads to (the
             # human's next decision), told as the truth is then, and heard if the robot may
             # inform there
-            for m in out[:len(acts) + 1]:
-                assert m.child is not None
-                if not self.together(m.child.true):
+            for move in out[:len(acts) + 1]:
+                assert move.child is not None
+                if not self.together(move.child.true):
                     continue
-                for mask in self.informing_sets(m.child):
-                    out.append(Move(ROBOT, m.kind, f"{self.inform_label(m.child.true, mask)} + "
-                                    f"{m.label}", self.costs.inform + m.cost,
-                                    self.inform(m.child._replace(turn=ROBOT), mask)._replace(
-                                        passive=m.child.passive, forced=m.child.forced),
-                                    m.op, atoms=mask))
+                for mask in self.informing_sets(move.child):
+                    out.append(Move(ROBOT, move.kind,
+                                    f"{self.inform_label(move.child.true, mask)} + {move.label}",
+                                    self.costs.inform + move.cost,
+                                    self.inform(move.child._replace(turn=ROBOT), mask)._replace(
+                                        passive=move.child.passive, forced=move.child.forced),
+                                    move.op, atoms=mask))
         if not self.together(t):
             return out
         for mask in self.informing_sets(es):
@@ -495,10 +498,11 @@ class Semantics:
             for op, rests in acts.items():
                 gop = self.grounded.human.ops[op]
                 for rest in dict.fromkeys(rests):
-                    m = self.human_exec(es, gop, (rest,))
+                    move = self.human_exec(es, gop, (rest,))
                     if len(rests) > 1:
-                        m = _relabel(m, f"{m.label} [{', '.join(self.net.names_of(rest))}]")
-                    out.append(m)
+                        left = ", ".join(self.net.names_of(rest))
+                        move = _relabel(move, f"{move.label} [{left}]")
+                    out.append(move)
         else:
             for op, rests in acts.items():
                 out.append(self.human_exec(es, self.grounded.human.ops[op], _hypotheses(rests)))
@@ -535,10 +539,10 @@ class Semantics:
 
     def _unmet(self, op: GOp, t: int, believed: int) -> int:
         """Atoms of the precondition on which the human's belief differs from the truth."""
-        m = 0
+        mask = 0
         for i in ground_atoms(op.pre_f):
-            m |= 1 << i
-        return m & (t ^ believed)
+            mask |= 1 << i
+        return mask & (t ^ believed)
 
     # -- communication ------------------------------------------------------------------------
     def uncertain_part(self, phi: Formula, states: tuple[int, ...]) -> Formula:
@@ -566,10 +570,10 @@ class Semantics:
         v = fn(es.true)
         keep = tuple(w for w in es.worlds if fn(w[0]) == v)
         if not keep:  # cannot happen for asks the human generates; revise to be safe
-            m = 0
+            mask = 0
             for i in ground_atoms(phi):
-                m |= 1 << i
-            keep = self.observe(es.true, es.worlds, self.grounded.expand(m))
+                mask |= 1 << i
+            keep = self.observe(es.true, es.worlds, self.grounded.expand(mask))
         return es._replace(turn=ROBOT, worlds=keep, passive=0, forced=False)
 
     def inform(self, es: EState, mask: int) -> EState:
@@ -651,7 +655,7 @@ class Semantics:
             nxt = self.informing_set(es, False)
             if self.comm.relevance == Relevance.PLAN:
                 plan = self.informing_set(es, True)
-                r = tuple(m for m in dict.fromkeys((plan, nxt)) if m)
+                r = tuple(mask for mask in dict.fromkeys((plan, nxt)) if mask)
             else:
                 r = (nxt,) if nxt else ()
             self._inform[key] = r
@@ -686,16 +690,16 @@ class Semantics:
             for size in range(1, min(len(cands), self.comm.inform_max_atoms) + 1):
                 best: tuple[int, int, list[str], int] | None = None
                 for combo in combinations(cands, size):
-                    m = 0
+                    mask = 0
                     for u in combo:
-                        m |= u
-                    w2 = self.observe(t, es.worlds, m)
+                        mask |= u
+                    w2 = self.observe(t, es.worlds, mask)
                     if not self.fixes(es, w2, want_r, plan):
                         continue
                     # prefer fewer remaining worlds, then telling what is true (a value counts
                     # as true), then by name
                     told = sum(1 for u in combo if t & u or u in grounded.unit_names)
-                    rank = (len(w2), -told, [grounded.unit_name(u) for u in combo], m)
+                    rank = (len(w2), -told, [grounded.unit_name(u) for u in combo], mask)
                     if best is None or rank < best:
                         best = rank
                 if best is not None:
@@ -725,5 +729,7 @@ def _hypotheses(agendas: Iterable[Agenda]) -> tuple[Agenda, ...]:
     return tuple(sorted(set(agendas)))
 
 
-def _relabel(m: Move, label: str) -> Move:
-    return Move(m.agent, m.kind, label, m.cost, m.child, m.op, m.atoms, m.failure, m.waits)
+def _relabel(move: Move, label: str) -> Move:
+    """Return ``move`` under another label."""
+    return Move(move.agent, move.kind, label, move.cost, move.child, move.op, move.atoms,
+                move.failure, move.waits)

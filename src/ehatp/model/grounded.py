@@ -112,23 +112,23 @@ class Grounded:
         """The mask of the unit bit ``i`` belongs to (§2)."""
         return self.unit_of.get(i, 1 << i)
 
-    def expand(self, m: int) -> int:
+    def expand(self, mask: int) -> int:
         """§2, §4: ``m`` with every variable and counter it touches made whole (what the
         human learns of an inferable unit whose value an action changed)."""
-        if not m & self.multi_mask:
-            return m
-        for i in bits(m & self.multi_mask):
-            m |= self.unit_of[i]
-        return m
+        if not mask & self.multi_mask:
+            return mask
+        for i in bits(mask & self.multi_mask):
+            mask |= self.unit_of[i]
+        return mask
 
-    def units(self, m: int) -> list[int]:
+    def units(self, mask: int) -> list[int]:
         """§2, §5: the (whole) units ``m`` touches, by their lowest bit: the candidates of an
         informing set, the order of observation."""
-        if not m & self.multi_mask:
-            return [1 << i for i in bits(m)]
+        if not mask & self.multi_mask:
+            return [1 << i for i in bits(mask)]
         out: list[int] = []
         seen = 0
-        for i in bits(m):
+        for i in bits(mask):
             if not seen >> i & 1:
                 u = self.unit(i)
                 seen |= u
@@ -162,9 +162,9 @@ class Grounded:
         name = self.atoms[_low(unit)]
         return name if t & unit else f"not {name}"
 
-    def literals(self, t: int, m: int) -> list[str]:
+    def literals(self, t: int, mask: int) -> list[str]:
         """Every unit ``m`` touches as ``t`` has it, by index (divergences, informs)."""
-        return [self.literal(t, u) for u in self.units(m)]
+        return [self.literal(t, u) for u in self.units(mask)]
 
     def world_diff(self, s: int, t: int) -> dict[str, list[str]]:
         """How world ``s`` differs from the truth ``t``: the atoms (and a variable's or
@@ -182,10 +182,10 @@ class Grounded:
 
     def counter_mask(self) -> int:
         """The bits of every counter."""
-        m = 0
+        mask = 0
         for u in self.counter_units:
-            m |= u
-        return m
+            mask |= u
+        return mask
 
     def state_atoms(self, s: int) -> list[str]:
         """The true atoms of ``s``, with each variable's value (it is one of its bits) and
@@ -195,34 +195,34 @@ class Grounded:
         return _merge(self, s & ~self.counter_mask(),
                       [(_low(u), self.fact(s, u)) for u in self.counter_units])
 
-    def mask_atoms(self, m: int) -> list[str]:
-        return [self.atoms[i] for i in bits(m)]
+    def mask_atoms(self, mask: int) -> list[str]:
+        return [self.atoms[i] for i in bits(mask)]
 
     def visible_mask(self, t: int) -> int:
-        m = 0
+        out = 0
         for fn, mask in self.visible:
             if fn(t):
-                m |= mask
-        return m
+                out |= mask
+        return out
 
 
-def _low(m: int) -> int:
+def _low(mask: int) -> int:
     """The index of the lowest set bit of ``m`` (> 0)."""
-    return (m & -m).bit_length() - 1
+    return (mask & -mask).bit_length() - 1
 
 
-def _merge(g: Grounded, m: int, extra: list[tuple[int, str]]) -> list[str]:
+def _merge(g: Grounded, mask: int, extra: list[tuple[int, str]]) -> list[str]:
     """The names of ``m``'s bits and the ``extra`` (index, text) entries, by index."""
-    return [name for _, name in sorted([*((i, g.atoms[i]) for i in bits(m)), *extra])]
+    return [name for _, name in sorted([*((i, g.atoms[i]) for i in bits(mask)), *extra])]
 
 
-def bits(m: int) -> Iterable[int]:
+def bits(mask: int) -> Iterable[int]:
     """The indices of the set bits of ``m``, lowest first (the atoms of a mask, §2)."""
     i = 0
-    while m:
-        if m & 1:
+    while mask:
+        if mask & 1:
             yield i
-        m >>= 1
+        mask >>= 1
         i += 1
 
 

@@ -115,11 +115,11 @@ class _Grounder:
             human_agenda=h_ag, visible=visible, observable_mask=obs, inferable_mask=inf,
             hidden_mask=hid, copresent_f=cop_f, copresent=self.compile(cop_f), goal_f=goal_f,
             goal=self.compile(goal_f), fns=self.fns, display=self.display,
-            var_units=tuple(m for k, _, m, _ in units if k == "variable"),
-            counter_units=tuple(m for k, _, m, _ in units if k == "counter"),
-            unit_names={m: head for _, head, m, _ in units},
-            counter_max={m: top for k, _, m, top in units if k == "counter"},
-            multi_mask=sum(m for _, _, m, _ in units),
+            var_units=tuple(mask for k, _, mask, _ in units if k == "variable"),
+            counter_units=tuple(mask for k, _, mask, _ in units if k == "counter"),
+            unit_names={mask: head for _, head, mask, _ in units},
+            counter_max={mask: top for k, _, mask, top in units if k == "counter"},
+            multi_mask=sum(mask for _, _, mask, _ in units),
             unit_of=self.unit_mask,
         )
 
@@ -553,10 +553,10 @@ class _ModelGrounding:
         self.todo: list[int] = []
         self.seen: set[int] = set()
         self.methods_of: dict[str, list[Method]] = {}
-        for m in model.methods:
-            self.methods_of.setdefault(m.task.name, []).append(m)
+        for method in model.methods:
+            self.methods_of.setdefault(method.task.name, []).append(method)
         for ms in self.methods_of.values():
-            ms.sort(key=lambda m: m.name)
+            ms.sort(key=lambda method: method.name)
         self.pending: set[int] | None = None  # on demand: reached, not yet grounded
         self._checks: dict[Method, tuple[list[list[Formula]], list[list[_Gen]]]] = {}
 
@@ -597,21 +597,21 @@ class _ModelGrounding:
         assert self.pending is not None
         self.pending.discard(t)
 
-    def bindings(self, m: Method, tb: dict[Var, str]) -> Iterator[tuple[str, ...]]:
+    def bindings(self, method: Method, tb: dict[Var, str]) -> Iterator[tuple[str, ...]]:
         """§1: the bindings of ``m``'s own parameters, in the order of the product of their
         types' objects, without those a conjunct of ``m``'s precondition folds to false for.
         Each conjunct is read as soon as its variables are bound, and a positive static
         literal such as ``neighbour(?l1, ?l2)`` offers only the values the initial state
         gives it (an index of the facts), so a static relation cuts the enumeration short."""
         gr = self.gr
-        plan = self._checks.get(m)
+        plan = self._checks.get(method)
         if plan is None:
-            plan = self._checks[m] = _binding_plan(m, set(tb), gr.factual)
+            plan = self._checks[method] = _binding_plan(method, set(tb), gr.factual)
         checks, gens = plan
         b = dict(tb)
         if any(gr.ground_f(c, b) == FALSE for c in checks[0]):
             return
-        params = m.params
+        params = method.params
         domains = [gr.objects[v.type] for v in params]
         n = len(params)
         vals: list[str] = []
@@ -664,22 +664,22 @@ class _ModelGrounding:
             df = gr.ground_f(task.done, tb)
             dict.__setitem__(g.done, t, (df, gr.compile(df)))
         gms = []
-        for m in self.methods_of.get(name, []):
-            for vals in self.bindings(m, tb):
-                b = {**tb, **dict(zip(m.params, vals, strict=True))}
-                pre_f = gr.shown(m.pre, b)
+        for method in self.methods_of.get(name, []):
+            for vals in self.bindings(method, tb):
+                b = {**tb, **dict(zip(method.params, vals, strict=True))}
+                pre_f = gr.shown(method.pre, b)
                 if pre_f == FALSE:
                     continue
                 subs = []
-                for st in m.subtasks:
+                for st in method.subtasks:
                     sargs = tuple(b[a] if isinstance(a, Var) else a for a in st.args)
                     gr._check_subtask(model, st, sargs)
                     sid = gr.task_id(call_str(st.name, sargs))
                     self.mention(sid, (st.name, sargs))
                     subs.append(sid)
-                label = f"{m.name}({', '.join(vals)})" if vals else m.name
+                label = f"{method.name}({', '.join(vals)})" if vals else method.name
                 gms.append(GMethod(f"{name}.{label}", pre_f, gr.compile(pre_f),
-                                   tuple(subs), m.predecessors()))
+                                   tuple(subs), method.predecessors()))
         dict.__setitem__(g.methods, t, tuple(gms))
 
 
@@ -689,7 +689,7 @@ variable's positions, the other positions, the terms at those)."""
 _NONE: frozenset[str] = frozenset()
 
 
-def _binding_plan(m: Method, bound: set[Var], factual: set[str]
+def _binding_plan(method: Method, bound: set[Var], factual: set[str]
                   ) -> tuple[list[list[Formula]], list[list[_Gen]]]:
     """How to enumerate ``m``'s own parameters: the conjuncts of its precondition by the
     parameter that binds their last variable (entry 0: those the task's arguments bind; entry
@@ -697,10 +697,10 @@ def _binding_plan(m: Method, bound: set[Var], factual: set[str]
     whole precondition). A positive literal of a ``factual`` predicate (static, or shrinking:
     true only where the initial state says so) offers that parameter's values instead of
     being read for each."""
-    parts = list(m.pre.args) if isinstance(m.pre, And) else [m.pre]
-    checks: list[list[Formula]] = [[] for _ in range(len(m.params) + 1)]
-    gens: list[list[_Gen]] = [[] for _ in range(len(m.params) + 1)]
-    where = {v: i + 1 for i, v in enumerate(m.params)}
+    parts = list(method.pre.args) if isinstance(method.pre, And) else [method.pre]
+    checks: list[list[Formula]] = [[] for _ in range(len(method.params) + 1)]
+    gens: list[list[_Gen]] = [[] for _ in range(len(method.params) + 1)]
+    where = {v: i + 1 for i, v in enumerate(method.params)}
     for c in parts:
         try:
             vs = free_vars(c)
@@ -710,7 +710,7 @@ def _binding_plan(m: Method, bound: set[Var], factual: set[str]
             continue
         at = max((where.get(v, 0) for v in vs), default=0)
         if at and type(c) is Atom and c.pred in factual:
-            v = m.params[at - 1]
+            v = method.params[at - 1]
             at_v = tuple(k for k, a in enumerate(c.args) if a == v)
             fixed = tuple(k for k, a in enumerate(c.args) if a != v)
             gens[at].append((c.pred, at_v, fixed, tuple(c.args[k] for k in fixed)))

@@ -67,9 +67,9 @@ Option = tuple[int, Agenda]  # (ground action id or FINISH, remaining agenda)
 Members = list[tuple[int, int]]  # (task id, predecessor mask over the list's positions)
 
 
-def _drop_bit(m: int, i: int) -> int:
+def _drop_bit(mask: int, i: int) -> int:
     """``m`` without bit ``i``, the bits above it moved down by one."""
-    return (m & ((1 << i) - 1)) | ((m >> (i + 1)) << i)
+    return (mask & ((1 << i) - 1)) | ((mask >> (i + 1)) << i)
 
 
 def _series(ms: Sequence[tuple[int, int]], ids: list[int]) -> list[list[int]]:
@@ -273,7 +273,7 @@ class Networks:
         key = (b, i)
         r = self._without.get(key)
         if r is None:
-            ms = [(t, _drop_bit(m, i)) for j, (t, m) in enumerate(b) if j != i]
+            ms = [(t, _drop_bit(preds, i)) for j, (t, preds) in enumerate(b) if j != i]
             r = self._without[key] = self.normal(ms)
         return r
 
@@ -291,8 +291,8 @@ class Networks:
             for it in rest:  # the items of rest in sequence, blocks opened
                 if isinstance(it, Block):
                     base = len(new)
-                    for t, m in it:
-                        new.append((t, before | (m << base)))
+                    for t, preds in it:
+                        new.append((t, before | (preds << base)))
                     before |= ((1 << len(it)) - 1) << base
                 else:
                     new.append((it, before))
@@ -300,15 +300,15 @@ class Networks:
             k = len(new)
             span = ((1 << k) - 1) << i
 
-            def moved(m: int) -> int:
-                low = m & ((1 << i) - 1)
-                high = (m >> (i + 1)) << (i + k)
-                return low | high | (span if m >> i & 1 else 0)
+            def moved(preds: int) -> int:
+                low = preds & ((1 << i) - 1)
+                high = (preds >> (i + 1)) << (i + k)
+                return low | high | (span if preds >> i & 1 else 0)
 
             own = moved(b[i][1])
-            ms: Members = [(t, moved(m)) for t, m in b[:i]]
-            ms += [(t, (m << i) | own) for t, m in new]
-            ms += [(t, moved(m)) for t, m in b[i + 1:]]
+            ms: Members = [(t, moved(preds)) for t, preds in b[:i]]
+            ms += [(t, (preds << i) | own) for t, preds in new]
+            ms += [(t, moved(preds)) for t, preds in b[i + 1:]]
             r = self._with[key] = self.normal(ms)
         return r
 
@@ -324,7 +324,7 @@ class Networks:
             for j in range(len(ms) - 1, -1, -1):
                 if not known(ms[j][0]):
                     del ms[j]
-                    ms = [(t, _drop_bit(m, j)) for t, m in ms]
+                    ms = [(t, _drop_bit(preds, j)) for t, preds in ms]
             if ms:
                 out.extend(self.normal(ms))
         return tuple(out)
@@ -442,7 +442,7 @@ class Refiner:
             open_: Open = ()) -> None:
         """Refine ``agenda``; ``open_``: the tasks being refined around it, each with the
         length of what followed it (still being refined while the agenda is longer)."""
-        m = self.model
+        model = self.model
         while True:
             if not agenda:
                 out.add((FINISH, ()))
@@ -451,7 +451,7 @@ class Refiner:
             if isinstance(t, Block):
                 self._go_block(t, agenda[1:], s, out, depth, open_)
                 return
-            op = m.ops.get(t)
+            op = model.ops.get(t)
             if op is not None:
                 if op.done is not None and op.done(s):
                     agenda = agenda[1:]
@@ -459,7 +459,7 @@ class Refiner:
                 if op.pre(s):
                     out.add((t, agenda[1:]))
                 return
-            d = m.done.get(t)
+            d = model.done.get(t)
             if d is not None and d[1](s):
                 agenda = agenda[1:]
                 continue
@@ -526,7 +526,7 @@ class Refiner:
                 conds: tuple[Formula, ...],
                 out: dict[tuple[int, Agenda, tuple[Formula, ...]], int], depth: int,
                 open_: Open = ()) -> None:
-        m = self.model
+        model = self.model
         if not agenda:
             key: tuple[int, Agenda, tuple[Formula, ...]] = (FINISH, (), conds)
             out[key] = out.get(key, 0) | ws
@@ -537,7 +537,7 @@ class Refiner:
         if isinstance(t, Block):
             self._go_all_block(t, rest, states, ws, conds, out, depth, open_)
             return
-        op = m.ops.get(t)
+        op = model.ops.get(t)
         if op is not None:
             if op.done is not None and op.done_f is not None:
                 dw = _holds(op.done, states, ws)
@@ -554,7 +554,7 @@ class Refiner:
                 k2 = (t, rest, _add(conds, op.pre_f, pw != ws))
                 out[k2] = out.get(k2, 0) | pw
             return
-        d = m.done.get(t)
+        d = model.done.get(t)
         if d is not None:
             dw = _holds(d[1], states, ws)
             if dw:

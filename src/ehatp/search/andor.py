@@ -320,17 +320,17 @@ def _expand(gr: Graph, n: int, heap: list[Entry], stats: Stats, max_depth: int,
     heappush = heapq.heappush
     sym = gr.sym
     edges: list[Edge] = []
-    for m in moves:
-        child = m.child
+    for move in moves:
+        child = move.child
         if child is None:
-            edges.append(Edge(gr.descriptor(m, -1), -1))
+            edges.append(Edge(gr.descriptor(move, -1), -1))
             continue
         stats.generated += 1
         pid = 0
         if sym is not None:
             child, pid = sym.canon(child)
         c = index.get(child)
-        g1 = g0 + m.cost
+        g1 = g0 + move.cost
         if c is None:
             if max_states is not None and stats.distinct >= max_states:
                 stats.expanded -= 1
@@ -347,7 +347,7 @@ def _expand(gr: Graph, n: int, heap: list[Entry], stats: Stats, max_depth: int,
             if d0 < gr.depth[c]:
                 _lower_depth(gr, c, d0, heap, max_depth, hfn)
             gr.add_parent(c, n)
-        edges.append(Edge(gr.descriptor(m, c), c, pid))
+        edges.append(Edge(gr.descriptor(move, c), c, pid))
     gr.edges[n] = tuple(edges)
     gr.status[n] = EXPANDED
     if not gr.is_robot(n):

@@ -109,8 +109,8 @@ def least_costs(model: AgentModel, price: Callable[[Operator], Cost]) -> dict[st
         out[name] = 0 if op.done is not None else price(op)
     for name, t in model.tasks.items():
         out[name] = 0 if t.done is not None else INF
-    methods = [(m.task.name, tuple(st.name for st in m.subtasks)) for m in model.methods
-               if m.task.done is None]
+    methods = [(method.task.name, tuple(st.name for st in method.subtasks))
+               for method in model.methods if method.task.done is None]
     # Bellman-Ford over the AND/OR task graph: after round k every task whose cheapest
     # decomposition tree is at most k deep has its value; with costs >= 0 a cheapest tree never
     # repeats a task on a branch, so len(tasks) + 1 rounds see no change
@@ -201,7 +201,7 @@ class Heuristic:
             cost: Bound = 0
             count: Bound = 0
             for item in agenda:
-                for t in ((m for m, _ in item) if isinstance(item, Block) else (item,)):
+                for t in ((member for member, _ in item) if isinstance(item, Block) else (item,)):
                     if t < 0:  # FINISH
                         continue
                     schema = names[t].partition("(")[0]

@@ -204,7 +204,8 @@ def _hidden_choice(problem: Problem, budget: Budget, settings: _Settings) -> str
     if other.policy is None:
         return ""
     for node in other.policy.nodes:
-        told = [m.action for m in node.moves if m.action.endswith("]") and " [" in m.action]
+        told = [move.action for move in node.moves
+                if move.action.endswith("]") and " [" in move.action]
         if told:
             act = told[0].partition(" [")[0]
             means = " or ".join(t.partition(" [")[2][:-1] for t in told

@@ -217,17 +217,17 @@ def _realise(gr: Graph, root: int, values: Values,
     return rg, real_root, Values(zeros, choice, zeros)
 
 
-def _match(sym: Any, tau: int, m: Move, child: EState, real: list[Move],
+def _match(sym: Any, tau: int, move: Move, child: EState, real: list[Move],
            used: set[int]) -> int:
     """The real move that is ``m`` renamed by ``tau`` and leads to ``child``: same agent,
     kind and cost, the renamed action and atoms told, preferably the renamed label."""
-    op = sym.task_map(tau).get(m.op, m.op) if m.op >= 0 else m.op
-    atoms = sym.state(tau, m.atoms)
+    op = sym.task_map(tau).get(move.op, move.op) if move.op >= 0 else move.op
+    atoms = sym.state(tau, move.atoms)
     found = -1
-    label = sym.label(tau, m.label)
+    label = sym.label(tau, move.label)
     for j, x in enumerate(real):
-        if j in used or x.child != child or x.agent != m.agent or x.kind != m.kind \
-                or x.cost != m.cost or x.op != op or x.atoms != atoms:
+        if j in used or x.child != child or x.agent != move.agent or x.kind != move.kind \
+                or x.cost != move.cost or x.op != op or x.atoms != atoms:
             continue
         if x.label == label:
             return j
@@ -236,15 +236,15 @@ def _match(sym: Any, tau: int, m: Move, child: EState, real: list[Move],
     return found
 
 
-def _match_orbit(sym: Any, m: Move, node: EState, real: list[Move],
+def _match_orbit(sym: Any, move: Move, node: EState, real: list[Move],
                  used: set[int]) -> tuple[int, EState, int]:
     """A real move of the same agent, kind and cost as ``m`` whose child has the canonical
     form ``node`` (an ``inform`` of another set tied with the canonical one on everything but
     names, :class:`~.symmetry.SymSemantics`); its index, child and the renaming from ``node``
     to that child."""
     for j, x in enumerate(real):
-        if j in used or x.child is None or x.agent != m.agent or x.kind != m.kind \
-                or x.cost != m.cost:
+        if j in used or x.child is None or x.agent != move.agent or x.kind != move.kind \
+                or x.cost != move.cost:
             continue
         c, pid = sym.canon(x.child)
         if c == node:
@@ -262,12 +262,12 @@ def graph_costs(nodes: list[PolicyNode], objective: Objective) -> tuple[list[Cos
         moves = nodes[i].moves
         if not moves:
             continue
-        worst[i] = max(m.cost + worst[m.to] for m in moves)
+        worst[i] = max(move.cost + worst[move.to] for move in moves)
         if len(moves) == 1:
             mean[i] = moves[0].cost + mean[moves[0].to]
             continue
-        mean[i] = weighted_mean([objective.weight(m.action, m.name) for m in moves],
-                                [m.cost + mean[m.to] for m in moves])
+        mean[i] = weighted_mean([objective.weight(move.action, move.name) for move in moves],
+                                [move.cost + mean[move.to] for move in moves])
     return worst, mean
 
 

@@ -193,32 +193,32 @@ class Symmetry:
     def atom_map(self, pid: int) -> dict[int, int]:
         """Atom index -> its image under ``pid`` (moved atoms only); KeyError when an image
         is no atom (detection turns that into "not an automorphism")."""
-        m = self._atom_maps.get(pid)
-        if m is None:
+        amap = self._atom_maps.get(pid)
+        if amap is None:
             ren = self.rename(pid)
             idx = self.grounded.atom_index
-            m = {}
+            amap = {}
             for i, parts in self._atom_parts.items():
                 j = idx[self._name_map(parts, ren)]
                 if j != i:
-                    m[i] = j
-            self._atom_maps[pid] = m
-        return m
+                    amap[i] = j
+            self._atom_maps[pid] = amap
+        return amap
 
     def task_map(self, pid: int) -> dict[int, int]:
-        m = self._task_maps.get(pid)
-        if m is None:
+        tmap = self._task_maps.get(pid)
+        if tmap is None:
             ren = self.rename(pid)
             idx = self.grounded.task_index
-            m = {}
+            tmap = {}
             for t, parts in self._task_parts.items():
                 u = idx.get(self._name_map(parts, ren))
                 if u is None:
                     raise NotSymmetric(f"task {self.grounded.task_names[t]} has no image")
                 if u != t:
-                    m[t] = u
-            self._task_maps[pid] = m
-        return m
+                    tmap[t] = u
+            self._task_maps[pid] = tmap
+        return tmap
 
     def label(self, pid: int, text: str) -> str:
         """A move label or a message with the objects renamed."""
@@ -232,23 +232,23 @@ class Symmetry:
         moved = s & self.movable_mask
         if pid == 0 or not moved:
             return s
-        m = self.atom_map(pid)
+        amap = self.atom_map(pid)
         out = s & ~self.movable_mask
         while moved:
             low = moved & -moved
             i = low.bit_length() - 1
-            out |= 1 << m.get(i, i)
+            out |= 1 << amap.get(i, i)
             moved ^= low
         return out
 
     def agenda(self, pid: int, ag: Agenda) -> Agenda:
         if pid == 0 or not ag:
             return ag
-        m = self.task_map(pid)
+        tmap = self.task_map(pid)
         out: list[int] = []
         for t in ag:  # no blocks: partial order turns the reduction off (detect)
             assert isinstance(t, int)
-            out.append(m.get(t, t))
+            out.append(tmap.get(t, t))
         return tuple(out)
 
     def worlds(self, pid: int, ws: Worlds) -> Worlds:
@@ -366,10 +366,10 @@ def detect(grounded: Grounded) -> Symmetry | None:
     there is none (or the problem uses a feature the reduction does not cover: partially
     ordered methods; a model too large to ground ahead, ``[limits] ground_ahead``)."""
     models = _models(grounded)
-    if any(m.lazy for m in models):  # grounded on demand: the whole model is not known
+    if any(model.lazy for model in models):  # grounded on demand: the whole model is not known
         return None
-    for m in models:
-        for ms in m.methods.values():
+    for model in models:
+        for ms in model.methods.values():
             if any(x.order is not None for x in ms):
                 return None
     fixed = fixed_objects(grounded)
@@ -581,11 +581,11 @@ class SymSemantics(Semantics):
                        "observed")
 
     def informing_set(self, es: EState, plan: bool) -> int:
-        m = super().informing_set(es, plan)
-        if m and self.watch and not self.unsafe and self._tied(es, m, plan):
+        mask = super().informing_set(es, plan)
+        if mask and self.watch and not self.unsafe and self._tied(es, mask, plan):
             self.unsafe = ("an informing set chosen by name among equally good ones that "
                            "are not each other's image")
-        return m
+        return mask
 
     def _tied(self, es: EState, chosen: int, plan: bool) -> bool:
         """Whether another set of the chosen size is as good as ``chosen`` on everything but
@@ -605,8 +605,8 @@ class SymSemantics(Semantics):
         def valid(w2: Worlds, want_r: bool) -> bool:
             return self.fixes(es, w2, want_r, plan)
 
-        def rank(m: int, combo: Iterable[int]) -> tuple[int, int]:
-            w2 = self.observe(t, es.worlds, m)
+        def rank(mask: int, combo: Iterable[int]) -> tuple[int, int]:
+            w2 = self.observe(t, es.worlds, mask)
             return len(w2), -sum(1 for u in combo if t & u or u in grounded.unit_names)
 
         w_chosen = self.observe(t, es.worlds, chosen)
@@ -617,16 +617,16 @@ class SymSemantics(Semantics):
         movable = self.sym.movable_mask
         key: EState | None = None
         for combo in combinations(cands, size):
-            m = 0
+            mask = 0
             for u in combo:
-                m |= u
-            if m == chosen:
+                mask |= u
+            if mask == chosen:
                 continue
-            w2 = self.observe(t, es.worlds, m)
-            if valid(w2, want_r) and rank(m, combo) == best and (m | chosen) & movable:
+            w2 = self.observe(t, es.worlds, mask)
+            if valid(w2, want_r) and rank(mask, combo) == best and (mask | chosen) & movable:
                 if key is None:
                     key = self.sym.canon(self.inform(es, chosen))[0]
-                if self.sym.canon(self.inform(es, m))[0] != key:
+                if self.sym.canon(self.inform(es, mask))[0] != key:
                     return True
         return False
 

@@ -83,9 +83,9 @@ def compute_values(gr: Graph, root: int, objective: Objective | None = None,
     value: list[Cost | float] = [INF] * n_nodes
     assert mean is not None
     for n in topo:
-        m = mean[n]
-        assert m is not None
-        value[n] = m
+        mc = mean[n]
+        assert mc is not None
+        value[n] = mc
     return Values(value, _reachable(gr, root, choice), worst, exact)
 
 
@@ -531,8 +531,8 @@ class _Totals:
 
 def weighted_mean(weights: list[Fraction], xs: list[Cost]) -> Cost:
     """§7: ``sum(w * x) / sum(w)``, exact (an int when whole)."""
-    m = sum((w * x for w, x in zip(weights, xs, strict=True)), Fraction(0)) / sum(weights)
-    return int(m) if isinstance(m, Fraction) and m.denominator == 1 else m
+    mean = sum((w * x for w, x in zip(weights, xs, strict=True)), Fraction(0)) / sum(weights)
+    return int(mean) if isinstance(mean, Fraction) and mean.denominator == 1 else mean
 
 
 def speaks(move: Move) -> bool:
