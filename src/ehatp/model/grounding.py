@@ -10,11 +10,11 @@ from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from fractions import Fraction
 from typing import Any, TypeVar
 
+from ..errors import DomainError
 from .domain import (
     AgentModel,
     Assign,
     Domain,
-    DomainError,
     Effect,
     ForEach,
     Method,

@@ -19,7 +19,7 @@ from collections.abc import Callable, Iterable, Sequence
 from itertools import permutations, product
 from math import factorial
 
-from .domain import DomainError
+from ..errors import DomainError
 from .formula import Formula, StateFn, negate
 from .grounded import FINISH, GModel, bits, no_check
 

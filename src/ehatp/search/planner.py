@@ -5,11 +5,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from ..formats.policy import Policy
 from ..model.grounded import Grounded
 from ..model.grounding import ground_problem
 from ..model.options import Intentions
 from ..model.problem import Problem
-from ..policy_format import Policy
 from . import symmetry as _symmetry
 from .andor import SearchOutcome, search
 from .diagnose import diagnose

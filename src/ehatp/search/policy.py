@@ -8,9 +8,9 @@ from typing import Any
 
 from ..epistemic.semantics import ACTION, WAIT, Move, bits_of
 from ..epistemic.state import HUMAN, ROBOT, EState
+from ..formats.policy import Policy, PolicyMove, PolicyNode, num, topological_order
 from ..model.options import Objective, ObjectiveKind
 from ..model.problem import Cost, Problem
-from ..policy_format import Policy, PolicyMove, PolicyNode, num, topological_order
 from .graph import DEAD, EXPANDED, GOAL, OPEN, Edge, Graph, move_key
 from .values import Values, weighted_mean
 
