@@ -52,6 +52,8 @@ def _differences(a: EState, b: EState, sem: Semantics) -> str:
 
 
 def _ask_matches(step: Step, label: str) -> bool:
+    """Return whether the question ``step`` is the label ``label``: its conjuncts in any order
+    (§5)."""
     if step.label == label:
         return True
     if len(step.texts) > 7:
@@ -212,6 +214,10 @@ class Replay:
     # -- recorded facts ------------------------------------------------------------------------
 
     def facts(self, node: PolicyNode, es: EState, goal: bool) -> list[str]:
+        """Return how the facts recorded at ``node`` differ from the state ``es`` the replay
+        reached it in (docs/policy-format.md: state, agendas and hypotheses, co-presence, k,
+        worlds, whose move, goal, divergence and the worlds' differences), one message each;
+        none when they agree."""
         sem, g = self.sem, self.sem.grounded
         bad: list[str] = []
 
@@ -274,6 +280,9 @@ class Replay:
     # -- the replay ----------------------------------------------------------------------------
 
     def replay_after(self) -> EState | None:
+        """§4: replay the problem's opening moves (``after``, which the policy must record as
+        the problem fixes them) from the initial state; return the root's state (the one whose
+        recorded facts fit, when a label leaves a choice), or None after a violation."""
         sem = self.sem
         pol, prob = self.policy, self.problem
         if list(pol.after) != list(prob.after):
@@ -447,6 +456,7 @@ class Replay:
         return self.human_node(node, es, path, where)
 
     def why_not_goal(self, es: EState) -> str:
+        """§6: return why ``es`` is not a goal, the first condition that fails."""
         sem, g = self.sem, self.sem.grounded
         if not g.goal(es.true):
             return "the goal formula does not hold in T"
@@ -508,6 +518,9 @@ class Replay:
 
     def robot_node(self, node: PolicyNode, es: EState, path: list[str],
                    where: str) -> list[tuple[int, Step]]:
+        """§4: check a robot node: exactly one move, a legal robot option here, whose recorded
+        edge leads to the node of the move it names; return it with its step, or nothing after a
+        violation."""
         if len(node.moves) != 1:
             self.fail(path, f"{where}: a robot node must have exactly one move (its child: "
                       f"an OR choice), it has {len(node.moves)}: "
@@ -580,6 +593,9 @@ class Replay:
 
     def human_node(self, node: PolicyNode, es: EState, path: list[str],
                    where: str) -> list[tuple[int, Step]]:
+        """§3-§4: check a human node: no two branches on one label, every branch one of the
+        human's options and applicable in T, every option covered; return the branches to follow
+        with their steps."""
         if self.hidden_choice(node, path, where):
             return []
         options = self.sem.human_options(es)

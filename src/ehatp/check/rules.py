@@ -83,6 +83,7 @@ def _strictly_ends(agenda: Agenda, tail: Agenda) -> bool:
 
 
 def _frac(x: object) -> Fraction:
+    """Return a cost as an exact fraction: a float as the decimal that was written."""
     if isinstance(x, bool):
         raise TypeError("a cost cannot be a bool")
     if isinstance(x, int | Fraction):
@@ -455,6 +456,9 @@ class Rules:
                 if a != FINISH]
 
     def robot_act(self, es: EState, a: int, rest: Agenda) -> Step:
+        """§4: the robot does action ``a``, leaving ``rest``: witnessed while co-present (the
+        worlds that expected it advance, else every world is revised to the real agenda;
+        inferable atoms are set), else unseen (the product, k + 1)."""
         g = self.grounded
         op = g.robot.ops[a]
         t2 = op.apply(es.true)
@@ -597,6 +601,9 @@ class Rules:
     # -- §6: goal ----------------------------------------------------------------------------
 
     def is_goal(self, es: EState) -> bool:
+        """§6: the goal formula holds in T, the robot's agenda can finish under T, every human
+        agenda of A_H certainly finishes over W, and in every world the robot agenda the human
+        attributes can finish."""
         g = self.grounded
         if not g.goal(es.true):
             return False

@@ -17,6 +17,8 @@ COMMUNICATIONS = (INFORM, ASK, ANNOUNCE)  # the moves counted as communications 
 
 
 def check_costs(rp: Replay) -> None:
+    """§7: the costs the policy records are the problem's (inform, ask, wait, pass and each
+    action's)."""
     c = rp.problem.costs
     want: dict[str, object] = {"inform": c.inform, "ask": c.ask, "wait": c.wait,
                                "pass": c.pass_}
@@ -84,6 +86,9 @@ def check_objective(rp: Replay) -> None:
 
 
 def check_summary(rp: Replay, order: list[int] | None) -> None:
+    """§7: every node's recorded value is its cost-to-go under the objective, recomputed from
+    the validator's own move costs; the policy's cost, worst case and expected cost agree; its
+    communications and leaves are those of its tree unfolding."""
     pol = rp.policy
     nodes = pol.nodes
     worst, mean = values(rp, order)

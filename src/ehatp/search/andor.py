@@ -248,6 +248,7 @@ class _Search:
         return False
 
     def _state_limit(self) -> str:
+        """Return the state limit's reason, in words."""
         return f"state limit reached ({self.stats.distinct} distinct states)"
 
     def _after_expansion(self, n: int) -> bool:
@@ -388,6 +389,8 @@ def _lower_depth(gr: Graph, c: int, d: int, heap: list[Entry], max_depth: int,
 
 
 def _child_solved(gr: Graph, p: int) -> None:
+    """§7: child of ``p`` just solved: a robot node is solved by one child, a human node by all
+    of its children."""
     if gr.solved[p]:
         return
     if gr.is_robot(p):
@@ -399,6 +402,8 @@ def _child_solved(gr: Graph, p: int) -> None:
 
 
 def _mark_solved(gr: Graph, n: int) -> None:
+    """§7: node ``n`` is solved; propagate upwards to every expanded parent it solves (the
+    paper's propagate step)."""
     stack = [n]
     gr.solved[n] = 1
     while stack:

@@ -172,6 +172,7 @@ def realise(gr: Graph, root: int, values: Values,
 
 def _realise(gr: Graph, root: int, values: Values,
              check: Callable[[], None]) -> tuple[Graph, int, Values] | str:
+    """Return the real graph of :func:`realise` (see there), or why it cannot be built."""
     sym, sem = gr.sym, gr.sem
     assert sym is not None
     rg = Graph(sem)

@@ -115,7 +115,22 @@ def _reachable(gr: Graph, root: int, choice: dict[int, int]) -> dict[int, int]:
 def knuth(gr: Graph, budget: Budget | None = None) -> tuple[list[Cost | float], list[int]]:
     """§7, worst case: the least fixpoint of the min/max equations by Knuth's generalisation of
     Dijkstra's algorithm; returns the values and the order in which nodes were finalised
-    (every child a node's value comes from is finalised before it)."""
+    (every child a node's value comes from is finalised before it). In GTPyhop-style
+    pseudo-code::
+
+        knuth(graph):
+            queue = [(0, n) for every goal n]
+            while queue:
+                (v, n) = pop the least
+                if n is final: continue
+                value(n) = v; n is final
+                for each edge p -> n of cost c, p not final:
+                    if the robot moves at p: queue (v + c, p)
+                    else:
+                        worst(p) = max(worst(p), v + c)
+                        if every child of p is final: queue (worst(p), p)
+            return value (infinite where never final), the order of finalisation
+    """
     n_nodes = len(gr.states)
     value: list[Cost | float] = [INF] * n_nodes
     final = bytearray(n_nodes)
@@ -228,6 +243,8 @@ class LiveWorst:
         return worst
 
     def _lower(self, n: int, v: Cost | float) -> None:
+        """Lower ``n`` to ``v`` and let the decrease travel up through the ancestors, least new
+        value first, each parent re-evaluated from its children (see the class docstring)."""
         gr, value = self.gr, self.value
         states, edges_of = gr.states, gr.edges
         heap: list[tuple[Cost | float, int]] = [(v, n)]
