@@ -12,6 +12,7 @@ import typer
 
 from ..model.options import ObjectiveKind
 from ..model.problem import Problem, parse_size
+from ..search.limits import SolveStatus
 from .common import (
     EXIT_NO_POLICY,
     EXIT_OK,
@@ -157,7 +158,7 @@ def solve_cmd(
             live.close()
     wall_ms = (time.perf_counter() - t0) * 1000
     _summary(prob, result, wall_ms, target if written else None)
-    raise typer.Exit(EXIT_OK if result.status == "solved" else EXIT_NO_POLICY)
+    raise typer.Exit(EXIT_OK if result.status == SolveStatus.SOLVED else EXIT_NO_POLICY)
 
 
 def _write(result: Result, target: Path, budget: Budget) -> tuple[Result, bool]:
@@ -183,11 +184,11 @@ def _write(result: Result, target: Path, budget: Budget) -> tuple[Result, bool]:
 
 def _summary(prob: Problem, result: Result, wall_ms: float, written: Path | None) -> None:
     st = result.stats
-    if result.status == "solved" and result.optimal:
+    if result.status == SolveStatus.SOLVED and result.optimal:
         typer.secho(f"{prob.name}: solved (optimal policy found)", fg="green", bold=True)
-    elif result.status == "solved":
+    elif result.status == SolveStatus.SOLVED:
         typer.secho(f"{prob.name}: solved, {result.reason}", fg="yellow", bold=True)
-    elif result.status == "unsolvable":
+    elif result.status == SolveStatus.UNSOLVABLE:
         typer.secho(f"{prob.name}: {result.reason}", fg="red", bold=True)
     else:
         typer.secho(f"{prob.name}: stopped early, {result.reason}; partial statistics:",
@@ -205,10 +206,11 @@ def _summary(prob: Problem, result: Result, wall_ms: float, written: Path | None
                  ("communications", pol.communications)]
     rows.append(("time", f"{st.get('time_ms', 0):,} ms search, {wall_ms:,.1f} ms in all"))
     if written is not None:
-        note = ("" if result.optimal else " (NOT proven optimal)" if result.status == "solved"
+        solved = result.status == SolveStatus.SOLVED
+        note = ("" if result.optimal else " (NOT proven optimal)" if solved
                 else " (best found so far, NOT proven optimal)")
         rows.append(("policy", f"written to {written}{note}"))
-    elif result.status != "unsolvable":
+    elif result.status != SolveStatus.UNSOLVABLE:
         rows.append(("policy", "none found before the work stopped"))
     for k, v in rows:
         typer.echo(f"  {k:<15} {v}")

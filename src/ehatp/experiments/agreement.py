@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..formats.policy import Policy
+from ..search.limits import SolveStatus
 from .randomgen import build, draw
 
 MAX_STATES = 20_000
@@ -146,9 +147,9 @@ def check(seed: int, *, determinism: bool | None = None, max_states: int = MAX_S
                          "walk_seconds": time.perf_counter() - t0}
             if not report.ok:
                 return out("disagreement", report.message.splitlines()[0])
-        if r.status in ("timeout", "state-limit"):
+        if r.status in (SolveStatus.TIMEOUT, SolveStatus.STATE_LIMIT):
             return out("limit", r.reason)
-        if r.status != "solved" and r.status != "unsolvable":
+        if r.status not in (SolveStatus.SOLVED, SolveStatus.UNSOLVABLE):
             return out("crash", f"solve: unknown status {r.status!r}")
         if determinism:
             first = r.policy.to_json() if r.policy is not None else r.status
@@ -156,7 +157,7 @@ def check(seed: int, *, determinism: bool | None = None, max_states: int = MAX_S
                 stage = "reverse" if rev else "re-solve"
                 again = solve(build(draw(seed), reverse=rev), max_states=max_states,
                               timeout=timeout, symmetry=symmetry)
-                if again.status in ("timeout", "state-limit"):
+                if again.status in (SolveStatus.TIMEOUT, SolveStatus.STATE_LIMIT):
                     continue  # a limit hit is not comparable
                 second = again.policy.to_json() if again.policy is not None else again.status
                 if second != first:

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..errors import EhatpError
 from ..formats.problem_toml import load
+from ..search.limits import SolveStatus
 from ..search.planner import solve
 from .examples import examples_dir
 
@@ -92,13 +93,13 @@ def run_instance(row: PaperRow, repeat: int = 3, notify: Notify | None = None) -
         best_search = min(best_search, result.stats.get("time_ms", best_search))
     st = result.stats
     ms = round(best * 1000, 1)
-    out.update(solved=result.status == "solved", states=st.get("generated"),
+    out.update(solved=result.status == SolveStatus.SOLVED, states=st.get("generated"),
                distinct_states=st.get("distinct"), max_worlds=st.get("max_worlds"),
                time_ms=ms, search_ms=best_search)
     if result.policy is not None:
         out.update(leaves=result.policy.leaves, cost=_num(result.policy.cost),
                    communications=result.policy.communications)
-    if result.status != "solved":
+    if result.status != SolveStatus.SOLVED:
         out["error"] = result.reason
     return out
 

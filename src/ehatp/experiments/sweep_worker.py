@@ -40,6 +40,7 @@ from ..check.validator import validate
 from ..errors import EhatpError, InputError
 from ..formats.policy import num
 from ..formats.problem_toml import loads
+from ..search.limits import SolveStatus
 from ..search.planner import solve
 
 # Every row has these keys, in this order (None where they do not apply).
@@ -172,7 +173,7 @@ def _solve_into(row: dict[str, Any], task: Task, watchdog: Watchdog) -> None:
                    expected=None if pol.expected is None else num(pol.expected))
     row.update(optimal=result.optimal, reason=result.reason, stats=stats,
                search_ms=result.stats.get("time_ms"), status=result.status)
-    if result.status == "memory-limit" and task.memory_gb is not None:
+    if result.status == SolveStatus.MEMORY_LIMIT and task.memory_gb is not None:
         # solve stopped cleanly on a MemoryError under --memory: an error row all the same,
         # with what solve could say
         row.update(status="error", error_kind="memory", error="out of memory: the instance "

@@ -36,7 +36,7 @@ from ..epistemic.semantics import (
     Semantics,
     bits_of,
 )
-from ..epistemic.state import HUMAN, ROBOT, EState, Worlds, states_of
+from ..epistemic.state import EState, Worlds, states_of
 from ..errors import (
     ExecutionError,
     InputError,
@@ -48,6 +48,7 @@ from ..model.formula import conj
 from ..model.grounding import Grounded, ground_problem
 from ..model.htn import Agenda
 from ..model.problem import Cost, Problem
+from ..model.vocabulary import HUMAN, ROBOT
 
 if TYPE_CHECKING:
     from ..search.planner import Result

@@ -14,11 +14,15 @@ See docs/simulation.md and docs/behaviour-trees.md.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 from ..errors import ExecutionError
 from ..formats.policy import Policy
 from ..model.problem import Problem
 from .executor import Executor
+
+if TYPE_CHECKING:
+    from ..formats.bt_py_trees import HumanTurn, RobotCommand
 
 DEFAULT_CAP = 2000
 
@@ -126,57 +130,88 @@ def tick_py_trees(problem: Problem, policy: Policy, *, cap: int = DEFAULT_CAP,
     from py_trees.common import Status
 
     from ..formats.bt import build_py_tree
-    from ..formats.bt_py_trees import HumanTurn, RobotCommand
 
     try:
         start = Executor(problem, policy)
         start.replay_opening()
     except ExecutionError as e:
         return WalkReport(False, 0, False, f"at the start: {e}")
-    run = _Run(start.copy(), [])
+    check = _TreeCheck(_Run(start.copy(), []))
+    root = build_py_tree(policy, robot=check.robot, human=check.human,
+                         on_goal=lambda node: check.run.goals.append(node),
+                         on_uncovered=lambda seen, expected: check.run.uncovered.append(seen),
+                         problem=problem)
+    branches, prefix = 0, list[int]()
+    while True:
+        if branches >= cap:
+            return WalkReport(True, branches, True)
+        run = check.run = _Run(start.copy(), prefix)
+        status = _tick(root, run, ticks)
+        why = _tree_failure(run, status, ticks)
+        if why:
+            if status == Status.RUNNING:
+                root.stop(Status.INVALID)
+            return WalkReport(False, branches, False, _failure(branches + 1, run.path, why))
+        branches += 1
+        next_prefix = _next_branch(run.choices)
+        if next_prefix is None:
+            return WalkReport(True, branches, False)
+        prefix = next_prefix
 
-    def fail(message: str) -> None:
-        if not run.error:
-            run.error = message
 
-    def robot(cmd: RobotCommand) -> bool:
-        ex = run.ex
+class _TreeCheck:
+    """The robot's and the human's callbacks of the exported tree, each checked against the
+    executor of the run under way (:attr:`run`, a new one for each branch)."""
+
+    def __init__(self, run: _Run) -> None:
+        self.run = run
+
+    def fail(self, message: str) -> None:
+        if not self.run.error:
+            self.run.error = message
+
+    def robot(self, cmd: RobotCommand) -> bool:
+        """Return whether the robot's command is the policy's move (and any answer the
+        truthful one), doing it on the executor."""
+        ex = self.run.ex
         try:
             if cmd.question is not None:  # the answer to the question just asked
                 last = ex.history[-1]
                 yes = ex.answer(last.before, last.action.label)
                 if cmd.answer is not None and yes is not None \
                         and cmd.answer != ("yes" if yes else "no"):
-                    fail(f"the tree answers {cmd.answer} to {cmd.question}, the truth is "
-                         f"{'yes' if yes else 'no'}")
+                    self.fail(f"the tree answers {cmd.answer} to {cmd.question}, the truth is "
+                              f"{'yes' if yes else 'no'}")
                     return False
             if cmd.completes is None:
                 return True
             want = ex.next_robot_action()
             if want is None or "".join(want.label.split()) != "".join(cmd.completes.split()):
-                fail(f"the tree's robot does {cmd.completes}, the executor says "
-                     f"{'nothing (not the robot turn)' if want is None else want.label}")
+                self.fail(f"the tree's robot does {cmd.completes}, the executor says "
+                          f"{'nothing (not the robot turn)' if want is None else want.label}")
                 return False
             if cmd.kind == "action" and (cmd.name, cmd.args) != (want.name, want.args):
-                fail(f"the tree's robot does {cmd.name}{cmd.args}, the executor says "
-                     f"{want.name}{want.args}")
+                self.fail(f"the tree's robot does {cmd.name}{cmd.args}, the executor says "
+                          f"{want.name}{want.args}")
                 return False
-            run.path.append(f"{ex.robot_name} {cmd.completes}")
+            self.run.path.append(f"{ex.robot_name} {cmd.completes}")
             ex.robot_action_done(cmd.completes)
         except ExecutionError as e:
-            fail(str(e))
+            self.fail(str(e))
             return False
         return True
 
-    def human(turn: HumanTurn) -> str:
-        ex = run.ex
+    def human(self, turn: HumanTurn) -> str:
+        """Return the human's move of this branch at ``turn`` (checked to be where the
+        executor is, expecting what it expects), done on the executor; "" on a mismatch."""
+        run, ex = self.run, self.run.ex
         try:
             covered = [a.label for a in ex.expected_human_actions()]
             here = None if ex.node is None else ex.node.id
             if list(turn.expected) != covered or turn.node != here:
-                fail(f"the tree waits for the human at node {turn.node} expecting "
-                     f"{list(turn.expected)}; the executor is at node {here} expecting "
-                     f"{covered}")
+                self.fail(f"the tree waits for the human at node {turn.node} expecting "
+                          f"{list(turn.expected)}; the executor is at node {here} expecting "
+                          f"{covered}")
                 return ""
             k = len(run.choices)
             i = run.prefix[k] if k < len(run.prefix) else 0
@@ -185,48 +220,53 @@ def tick_py_trees(problem: Problem, policy: Policy, *, cap: int = DEFAULT_CAP,
             ex.observe_human_action(covered[i])
             return covered[i]
         except ExecutionError as e:
-            fail(str(e))
+            self.fail(str(e))
             return ""
 
-    # the callbacks read ``run``, the run under way (a new one for each branch)
-    root = build_py_tree(policy, robot=robot, human=human,
-                         on_goal=lambda node: run.goals.append(node),
-                         on_uncovered=lambda seen, expected: run.uncovered.append(seen),
-                         problem=problem)
-    branches, prefix = 0, list[int]()
-    while True:
-        if branches >= cap:
-            return WalkReport(True, branches, True)
-        run = _Run(start.copy(), prefix)
-        status = Status.RUNNING
-        for _ in range(ticks):
-            root.tick_once()
-            status = root.status
-            if status != Status.RUNNING or run.error:
-                break
-        ex = run.ex
-        why = run.error
-        if not why and status != Status.SUCCESS:
-            why = (f"the tree is still running after {ticks} ticks" if status == Status.RUNNING
-                   else f"the tree ends in {status.value}"
-                   + (f" (uncovered: {', '.join(run.uncovered)})" if run.uncovered else ""))
-        elif not why and not (ex.done and ex.goal_reached):
-            why = "the tree succeeds where the executor has not reached the goal"
-        elif not why and (ex.node is None or run.goals != [ex.node.id]):
-            why = f"the tree reports the goals {run.goals}, the executor is at a leaf " + (
-                "" if ex.node is None else str(ex.node.id))
-        if why:
-            if status == Status.RUNNING:
-                root.stop(Status.INVALID)
-            return WalkReport(False, branches, False, _failure(branches + 1, run.path, why))
-        branches += 1
-        # the next branch: the last choice that has a next option, depth first
-        choices = list(run.choices)
-        while choices and choices[-1][0] + 1 >= choices[-1][1]:
-            choices.pop()
-        if not choices:
-            return WalkReport(True, branches, False)
-        prefix = [i for i, _ in choices[:-1]] + [choices[-1][0] + 1]
+
+def _tick(root: Any, run: _Run, ticks: int) -> Any:
+    """Tick ``root`` until it stops running, the run fails, or ``ticks`` ticks; return the
+    tree's status."""
+    from py_trees.common import Status
+
+    status = Status.RUNNING
+    for _ in range(ticks):
+        root.tick_once()
+        status = root.status
+        if status != Status.RUNNING or run.error:
+            break
+    return status
+
+
+def _tree_failure(run: _Run, status: Any, ticks: int) -> str:
+    """Return why the run's branch failed ("" when the tree succeeded at the goal leaf the
+    executor reached, reporting that goal only)."""
+    from py_trees.common import Status
+
+    ex = run.ex
+    if run.error:
+        return run.error
+    if status != Status.SUCCESS:
+        return (f"the tree is still running after {ticks} ticks" if status == Status.RUNNING
+                else f"the tree ends in {status.value}"
+                + (f" (uncovered: {', '.join(run.uncovered)})" if run.uncovered else ""))
+    if not (ex.done and ex.goal_reached):
+        return "the tree succeeds where the executor has not reached the goal"
+    if ex.node is None or run.goals != [ex.node.id]:
+        return f"the tree reports the goals {run.goals}, the executor is at a leaf " + (
+            "" if ex.node is None else str(ex.node.id))
+    return ""
+
+
+def _next_branch(choices: list[tuple[int, int]]) -> list[int] | None:
+    """Return the human's choices that start the next branch, depth first (the last choice
+    that has a next option, taken), or None after the last branch."""
+    choices = list(choices)
+    while choices and choices[-1][0] + 1 >= choices[-1][1]:
+        choices.pop()
+    if not choices:
+        return None
+    return [i for i, _ in choices[:-1]] + [choices[-1][0] + 1]
 
 
 MOVES_SHOWN = 12  # the last moves of a failing branch that its message lists
