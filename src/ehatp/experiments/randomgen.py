@@ -472,7 +472,28 @@ class _Drawer:
         door = r.choice(generic) if self.chance(0.25) else None
         fluents = generic + ([f"mark({i})" for i in ITEMS] if items else [])
 
-        # the robot: r0.., put(i); job, sub, fetch(i)
+        robot, r_ops, robot_agenda, agenda_pool = self.robot_part(items, generic)
+        human, h_ops, human_agenda, home = self.human_part(items, generic)
+
+        init = (("home",) if home else ()) + tuple(a for a in fluents if self.chance(0.35))
+        goal = self.fit_later(0.3) or ()
+        feasible, robot, human, goal, final = self.fit(robot, human, init, robot_agenda,
+                                                      human_agenda, generic, fluents, goal)
+        if not feasible and not accept:
+            return None
+        robot_seen, mutations = self.robot_seen(robot, generic, fluents, final, init)
+        worlds = self.worlds(fluents, robot_agenda, agenda_pool, human)
+        ops_named = [o.name for o in r_ops + h_ops if o.name not in ("leave", "back")]
+        action_costs = ((r.choice(ops_named), r.randint(1, 3)),) if self.chance(0.15) else ()
+        return Spec(self.seed, tuple(atoms), items, glass, door, robot, human, robot_seen,
+                    mutations, init, worlds, robot_agenda, human_agenda, goal, action_costs,
+                    draw_settings(self.seed))
+
+    def robot_part(self, items: bool, generic: list[str]
+                   ) -> tuple[ModelSpec, list[OpSpec], tuple[str, ...], list[str]]:
+        """Return the robot's model (operators r0.., put(i); tasks job, sub, fetch(i)), its
+        operators, its agenda and what the agendas draw from."""
+        r = self.r
         r_ops = [self.op(f"r{k}", generic) for k in range(r.randint(1, 3))]
         if items and self.chance(0.6):
             r_ops.append(OpSpec("put", True, (("mark(?i)", False),), (("mark(?i)", True),),
@@ -502,8 +523,13 @@ class _Drawer:
         robot = ModelSpec(tuple(r_ops), tuple(tasks), tuple(methods))
         agenda_pool = ["job", *job_pool]
         robot_agenda = ("job",) if self.chance(0.6) else self.body(agenda_pool, 1, 3)
+        return robot, r_ops, robot_agenda, agenda_pool
 
-        # the human: h0.., leave, back, take(i); chore
+    def human_part(self, items: bool, generic: list[str]
+                   ) -> tuple[ModelSpec, list[OpSpec], tuple[str, ...], bool]:
+        """Return the human's model (operators h0.., leave, back, take(i); task chore), its
+        operators, its agenda and whether it starts at home."""
+        r = self.r
         h_ops = [self.op(f"h{k}", generic) for k in range(r.randint(1, 3))]
         h_ops += [OpSpec("leave", False, (("home", True),), (("home", False),)),
                   OpSpec("back", False, (("home", False),), (("home", True),))]
@@ -529,20 +555,7 @@ class _Drawer:
         human = ModelSpec(tuple(h_ops), (TaskSpec("chore", False, self.fit_later(0.2)),),
                           tuple(h_methods))
         human_agenda = ("chore",) + ((r.choice(h_prims),) if self.chance(0.25) else ())
-
-        init = (("home",) if home else ()) + tuple(a for a in fluents if self.chance(0.35))
-        goal = self.fit_later(0.3) or ()
-        feasible, robot, human, goal, final = self.fit(robot, human, init, robot_agenda,
-                                                      human_agenda, generic, fluents, goal)
-        if not feasible and not accept:
-            return None
-        robot_seen, mutations = self.robot_seen(robot, generic, fluents, final, init)
-        worlds = self.worlds(fluents, robot_agenda, agenda_pool, human)
-        ops_named = [o.name for o in r_ops + h_ops if o.name not in ("leave", "back")]
-        action_costs = ((r.choice(ops_named), r.randint(1, 3)),) if self.chance(0.15) else ()
-        return Spec(self.seed, tuple(atoms), items, glass, door, robot, human, robot_seen,
-                    mutations, init, worlds, robot_agenda, human_agenda, goal, action_costs,
-                    draw_settings(self.seed))
+        return human, h_ops, human_agenda, home
 
     # -- fitting conditions to one intended run ----------------------------------------------
 
@@ -1101,87 +1114,124 @@ def draw(seed: int) -> Spec:
 def build(spec: Spec, *, reverse: bool = False) -> Problem:
     """The problem of ``spec``; ``reverse`` declares everything in the reverse order (the
     result must not change)."""
+    return _Builder(spec, reverse).problem()
 
-    def order(xs: Iterable[Any]) -> list[Any]:
+
+class _Builder:
+    """The problem of one spec, built in the order :func:`build` has always declared it: the
+    domain's types, predicates, variables and counters, the agents' models, then the
+    problem's truth, worlds, goal and settings."""
+
+    def __init__(self, spec: Spec, reverse: bool) -> None:
+        self.spec, self.reverse = spec, reverse
+        self.d = Domain(f"random-{spec.seed}")
+        self.i = Var("i", self.d.type("item"))
+        self.valued = {v.atom: v for v in spec.values}
+        self.spots = [f"p{k}" for k in range(max((v.size for v in spec.values
+                                                  if v.kind == "variable"), default=0))]
+
+    def order(self, xs: Iterable[Any]) -> list[Any]:
         xs = list(xs)
-        return xs[::-1] if reverse else xs
+        return xs[::-1] if self.reverse else xs
 
-    d = Domain(f"random-{spec.seed}")
-    Item = d.type("item")
-    i = Var("i", Item)
-    valued = {v.atom: v for v in spec.values}
-    spots = [f"p{k}" for k in range(max((v.size for v in spec.values
-                                         if v.kind == "variable"), default=0))]
-    Spot = d.type("spot") if spots else ""
-    at = Var("s", Spot) if spots else i
-    home_vis = observable(Atom("home", ()))
-    kinds: dict[str, Observability] = {
-        "always": observable(), "home": home_vis, "away": observable(~Atom("home", ())),
-        "inferable": INFERABLE, "hidden": HIDDEN,
-        "glass": observable(Atom("home", ()) & Atom("glass", (i,))),
-    }
-    cop = conj(Atom("home", ()), *([Atom(spec.door, ())] if spec.door else []))
-    kinds["together"] = observable(cop)
-    decls: list[tuple[str, tuple[Var, ...], Observability]] = [
-        ("home", (), observable())]
-    for name, kind in spec.atoms:
-        head = _head(name)
-        decls.append((head, (i,) if head != name else (), kinds[kind]))
-    if spec.items:
-        decls.append(("glass", (i,), observable()))
-    for head, params, obs in order(decls):
-        vs = valued.get(head)
-        if vs is None:
-            d.predicate(head, *params, observability=obs)
-        elif vs.kind == "counter":
-            d.counter(head, max=vs.size, observability=obs)
-        else:  # seen whole, or only whether it is p1, or whether it is not p0
-            if obs.kind == "observable" and vs.sight != "whole":
-                which = eq(at, "p1") if vs.sight == "value" else ~eq(at, "p0")
-                obs = observable(conj(obs.when, which))
-            d.variable(head, values=at, observability=obs)
-    d.copresence = cop
+    def problem(self) -> Problem:
+        """Return the problem: the domain declared and modelled, then the problem's data."""
+        spec, valued = self.spec, self.valued
+        self.declare()
+        self.model_of(spec.robot, self.d.robot)
+        self.model_of(spec.human, self.d.human)
+        if spec.robot_seen is not None:
+            self.d.robot_seen_by_human = self.model_of(spec.robot_seen,
+                                                       AgentModel(self.d.robot_name))
+        init = set(spec.init) - set(valued) | {f"glass({g})" for g in spec.glass}
+        worlds = self.worlds(init)
+        objects = {"item": self.order((*ITEMS, *spec.twins)),
+                   **({"spot": self.order(self.spots)} if self.spots else {})}
+        return Problem(
+            name=f"random-{spec.seed}", domain=self.d, objects=objects,
+            init=frozenset({*(_call(a) for a in init),
+                            *(_value_of(vs, vs.init) for vs in spec.values)}),
+            robot_agenda=tuple(map(_call, spec.robot_agenda)),
+            human_agenda=tuple(map(_call, spec.human_agenda)),
+            beliefs=tuple(self.order(worlds)),
+            goal=tuple(self.goal(a, v) for a, v in spec.goal), **self.settings())
 
-    def atom(text: str) -> Atom:
+    def declare(self) -> None:
+        """Declare the spot type, the predicates, state variables and counters with their
+        observability, and co-presence."""
+        spec, d, i = self.spec, self.d, self.i
+        Spot = d.type("spot") if self.spots else ""
+        at = Var("s", Spot) if self.spots else i
+        home_vis = observable(Atom("home", ()))
+        kinds: dict[str, Observability] = {
+            "always": observable(), "home": home_vis, "away": observable(~Atom("home", ())),
+            "inferable": INFERABLE, "hidden": HIDDEN,
+            "glass": observable(Atom("home", ()) & Atom("glass", (i,))),
+        }
+        cop = conj(Atom("home", ()), *([Atom(spec.door, ())] if spec.door else []))
+        kinds["together"] = observable(cop)
+        decls: list[tuple[str, tuple[Var, ...], Observability]] = [
+            ("home", (), observable())]
+        for name, kind in spec.atoms:
+            head = _head(name)
+            decls.append((head, (i,) if head != name else (), kinds[kind]))
+        if spec.items:
+            decls.append(("glass", (i,), observable()))
+        for head, params, obs in self.order(decls):
+            vs = self.valued.get(head)
+            if vs is None:
+                d.predicate(head, *params, observability=obs)
+            elif vs.kind == "counter":
+                d.counter(head, max=vs.size, observability=obs)
+            else:  # seen whole, or only whether it is p1, or whether it is not p0
+                if obs.kind == "observable" and vs.sight != "whole":
+                    which = eq(at, "p1") if vs.sight == "value" else ~eq(at, "p0")
+                    obs = observable(conj(obs.when, which))
+                d.variable(head, values=at, observability=obs)
+        d.copresence = cop
+
+    def atom(self, text: str) -> Atom:
         head, _, arg = text.partition("(")
         if not arg:
             return Atom(head, ())
         a = arg.rstrip(")")
-        return Atom(head, (i if a == "?i" else a,))
+        return Atom(head, (self.i if a == "?i" else a,))
 
-    def lit(a: str, v: bool) -> Formula:
-        vs = valued.get(a)
+    def lit(self, a: str, v: bool) -> Formula:
+        vs = self.valued.get(a)
         if vs is None:
-            return atom(a) if v else ~atom(a)
+            return self.atom(a) if v else ~self.atom(a)
         if vs.kind == "variable":
-            return d.variables[a]() == "p1" if v else d.variables[a]() != "p1"
-        return d.counters[a]() >= 1 if v else d.counters[a]() == 0
+            return self.d.variables[a]() == "p1" if v else self.d.variables[a]() != "p1"
+        return self.d.counters[a]() >= 1 if v else self.d.counters[a]() == 0
 
-    def formula(ls: Iterable[Lit] | None) -> Formula:
-        parts = [lit(a, v) for a, v in ls or ()]
+    def formula(self, ls: Iterable[Lit] | None) -> Formula:
+        parts = [self.lit(a, v) for a, v in ls or ()]
         return conj(*parts) if parts else TRUE
 
-    def effect(a: str, v: bool) -> Effect:
-        vs = valued.get(a)
+    def effect(self, a: str, v: bool) -> Effect:
+        vs = self.valued.get(a)
         if vs is None:
-            return atom(a) if v else ~atom(a)
+            return self.atom(a) if v else ~self.atom(a)
         if vs.kind == "variable":
-            return d.variables[a]().set("p1" if v else f"p{vs.off}")
-        return d.counters[a]().incr(vs.step) if v else d.counters[a]().set(0)
+            return self.d.variables[a]().set("p1" if v else f"p{vs.off}")
+        return self.d.counters[a]().incr(vs.step) if v else self.d.counters[a]().set(0)
 
-    def effects(ls: Iterable[Lit]) -> list[Effect]:
-        return [effect(a, v) for a, v in ls]
+    def effects(self, ls: Iterable[Lit]) -> list[Effect]:
+        return [self.effect(a, v) for a, v in ls]
 
-    def model_of(ms: ModelSpec, m: AgentModel) -> AgentModel:
-        for t in order(ms.tasks):
+    def model_of(self, ms: ModelSpec, m: AgentModel) -> AgentModel:
+        """Return ``m`` with the tasks, operators and methods of ``ms``."""
+        i, formula = self.i, self.formula
+        for t in self.order(ms.tasks):
             m.task(t.name, *((i,) if t.param else ()),
                    done=formula(t.done) if t.done is not None else None)
-        for o in order(ms.ops):
-            effs: list[Effect] = effects(o.eff)
-            effs += [when(formula([c]), *effects(e)) for c, e in o.cond]
+        for o in self.order(ms.ops):
+            effs: list[Effect] = self.effects(o.eff)
+            effs += [when(formula([c]), *self.effects(e)) for c, e in o.cond]
             m.action(o.name, *((i,) if o.param else ()), pre=formula(o.pre), effects=effs,
                      cost=o.cost, done=formula(o.done) if o.done is not None else None)
-        for me in order(ms.methods):
+        for me in self.order(ms.methods):
             task = m.tasks[me.task]
             subs = []
             for s in me.subtasks:
@@ -1193,51 +1243,48 @@ def build(spec: Spec, *, reverse: bool = False) -> Problem:
                      pre=formula(me.pre), subtasks=subs, order=me.order)
         return m
 
-    model_of(spec.robot, d.robot)
-    model_of(spec.human, d.human)
-    if spec.robot_seen is not None:
-        d.robot_seen_by_human = model_of(spec.robot_seen, AgentModel(d.robot_name))
+    def worlds(self, init: set[str]) -> list[BeliefWorld]:
+        """Return the worlds the human entertains, as differences from ``init``."""
+        out = []
+        for n, w in enumerate(self.spec.worlds):
+            flips = set(w.flips) - set(self.valued)
+            told = {_value_of(vs, vs.worlds[n]) for vs in self.spec.values
+                    if vs.worlds[n] != vs.init}
+            out.append(BeliefWorld(frozenset({*(_call(a) for a in flips - init), *told}),
+                                   frozenset(_call(a) for a in flips & init),
+                                   None if w.robot_agenda is None
+                                   else tuple(_call(t) for t in w.robot_agenda)))
+        return out
 
-    def call(text: str) -> tuple[str, tuple[str, ...]]:
-        head, _, arg = text.partition("(")
-        return head, (arg.rstrip(")"),) if arg else ()
-
-    def value_of(vs: ValueSpec, k: int) -> tuple[str, tuple[str, ...]]:
-        return vs.atom, (f"p{k}" if vs.kind == "variable" else str(k),)
-
-    init = set(spec.init) - set(valued) | {f"glass({g})" for g in spec.glass}
-    worlds = []
-    for n, w in enumerate(spec.worlds):
-        flips = set(w.flips) - set(valued)
-        told = {value_of(vs, vs.worlds[n]) for vs in spec.values if vs.worlds[n] != vs.init}
-        worlds.append(BeliefWorld(frozenset({*(call(a) for a in flips - init), *told}),
-                                  frozenset(call(a) for a in flips & init),
-                                  None if w.robot_agenda is None
-                                  else tuple(call(t) for t in w.robot_agenda)))
-
-    def goal(a: str, v: bool) -> tuple[bool, tuple[str, tuple[str, ...]]]:
-        vs = valued.get(a)
+    def goal(self, a: str, v: bool) -> tuple[bool, tuple[str, tuple[str, ...]]]:
+        vs = self.valued.get(a)
         if vs is None:
-            return v, call(a)
+            return v, _call(a)
         if vs.kind == "variable":
             return v, (a, ("p1",))
         return not v, (a, ("0",))  # at least 1: not 0
-    tables: dict[str, dict[str, Any]] = {}
-    for key, value in spec.settings:
-        table, _, name = key.partition(".")
-        tables.setdefault(table, {})[name] = value
-    tables.setdefault("costs", {})["actions"] = dict(spec.action_costs)
-    kwargs: dict[str, Any] = {}
-    for table, fields in tables.items():
-        cls = TABLES[table]
-        kwargs.update(fields if cls is None else {table: cls(**fields)})
-    objects = {"item": order((*ITEMS, *spec.twins)), **({"spot": order(spots)} if spots else {})}
-    return Problem(
-        name=f"random-{spec.seed}", domain=d, objects=objects,
-        init=frozenset({*(call(a) for a in init), *(value_of(vs, vs.init) for vs in spec.values)}),
-        robot_agenda=tuple(map(call, spec.robot_agenda)),
-        human_agenda=tuple(map(call, spec.human_agenda)), beliefs=tuple(order(worlds)),
-        goal=tuple(goal(a, v) for a, v in spec.goal), **kwargs)
+
+    def settings(self) -> dict[str, Any]:
+        """Return the Problem's keyword arguments the spec's settings give (:data:`TABLES`)."""
+        tables: dict[str, dict[str, Any]] = {}
+        for key, value in self.spec.settings:
+            table, _, name = key.partition(".")
+            tables.setdefault(table, {})[name] = value
+        tables.setdefault("costs", {})["actions"] = dict(self.spec.action_costs)
+        kwargs: dict[str, Any] = {}
+        for table, fields in tables.items():
+            cls = TABLES[table]
+            kwargs.update(fields if cls is None else {table: cls(**fields)})
+        return kwargs
+
+
+def _call(text: str) -> tuple[str, tuple[str, ...]]:
+    head, _, arg = text.partition("(")
+    return head, (arg.rstrip(")"),) if arg else ()
+
+
+def _value_of(vs: ValueSpec, k: int) -> tuple[str, tuple[str, ...]]:
+    return vs.atom, (f"p{k}" if vs.kind == "variable" else str(k),)
 
 
 def problem(seed: int, *, reverse: bool = False) -> Problem:
