@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from ehatp.policy_format import Policy, PolicyMove, timeline
+from ehatp.formats.policy import Policy, PolicyMove, timeline
 
 START = {"agent": None, "kind": "start", "action": "start", "name": "start", "args": [],
          "cost": 0, "told": []}

@@ -11,10 +11,10 @@ from functools import cache
 
 import pytest
 
+from ehatp.experiments import agreement, randomgen
+from ehatp.formats.policy import Policy, PolicyMove, PolicyNode
 from ehatp.model.options import Intentions
-from ehatp.policy_format import Policy, PolicyMove, PolicyNode
 from ehatp.search.planner import solve
-from ehatp.tools import randomgen
 
 SAMPLE = range(300)  # solved, validated and executed by the suite (all of them: the benchmark)
 SEEDS = range(1000)  # drawn only
@@ -32,12 +32,12 @@ def _specs() -> tuple[randomgen.Spec, ...]:
 @pytest.mark.slow  # 300 random problems, as benchmarks/agreement.py
 def test_planner_and_validator_agree_and_every_policy_executes_on_random_problems() -> None:
     seeds = [*SAMPLE, *FOUND]
-    outcomes = randomgen.run(seeds, jobs=min(2, os.cpu_count() or 1))
+    outcomes = agreement.run(seeds, jobs=min(2, os.cpu_count() or 1))
     assert [o.seed for o in outcomes] == sorted(seeds)
     bad = [f"seed {o.seed}: {o.kind} (planner: {o.status or '-'}) {{{', '.join(o.options)}}}: "
            f"{o.detail} {o.unexecutable} {o.hidden_choice}" for o in outcomes if o.failed]
     assert not bad, "\n".join(bad)
-    counts = randomgen.summary(outcomes)
+    counts = agreement.summary(outcomes)
     # a generator whose problems all fail to solve would prove nothing
     assert counts["solved"] >= len(seeds) // 3, counts
     assert counts["executed"] == counts["solved"], counts
@@ -56,12 +56,12 @@ def test_a_human_node_with_two_moves_of_one_label_is_a_branch_on_a_hidden_choice
              _node(1, [("clr_l", 4)], "R"), _node(2, [("clr_r", 4)], "R"),
              _node(3, [("wait", 4)], "R"), _node(4, [], None)]
     policy = Policy("p", "d", {"robot": "R", "human": "H"}, 0, {}, nodes, 2, 0, 3)
-    assert randomgen.hidden_choices(policy) == [
+    assert agreement.hidden_choices(policy) == [
         "node 0: H grab( c1 ) twice (to nodes 1 and 2)"]
     # the robot's moves and a human node whose labels differ are no hidden choice
     nodes[0].moves.pop(1)
     nodes[1].moves.append(PolicyMove("R", "action", "clr_l", "clr_l", [], 1, 4))
-    assert randomgen.hidden_choices(policy) == []
+    assert agreement.hidden_choices(policy) == []
 
 
 def test_a_seed_is_the_same_problem_every_time() -> None:
@@ -165,8 +165,8 @@ def test_interchangeable_objects_let_the_symmetry_reduction_merge_states() -> No
     merged = 0
     for seed in twins:
         p = randomgen.problem(seed)
-        on = solve(p, max_states=randomgen.MAX_STATES, timeout=randomgen.TIMEOUT, symmetry=True)
-        off = solve(p, max_states=randomgen.MAX_STATES, timeout=randomgen.TIMEOUT,
+        on = solve(p, max_states=agreement.MAX_STATES, timeout=agreement.TIMEOUT, symmetry=True)
+        off = solve(p, max_states=agreement.MAX_STATES, timeout=agreement.TIMEOUT,
                     symmetry=False)
         assert on.status == off.status and on.stats.get("cost") == off.stats.get("cost")
         merged += on.stats["distinct"] < off.stats["distinct"]
@@ -177,7 +177,7 @@ def test_in_the_shelf_case_the_robot_commits_blind_unless_it_sees_or_asks_the_in
 ) -> None:
     """Where the drawn problem with the shelf case is solved when the human's intentions are
     visible, it is unsolvable when they are hidden and solved again when the robot may ask."""
-    limits = {"max_states": randomgen.MAX_STATES, "timeout": randomgen.TIMEOUT}
+    limits = {"max_states": agreement.MAX_STATES, "timeout": agreement.TIMEOUT}
     shown = 0
     for s in _specs():
         if not s.commit:

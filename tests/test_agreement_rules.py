@@ -138,7 +138,7 @@ def test_an_opening_step_naming_the_wrong_agent_is_refused() -> None:
 
 
 def test_importing_the_validator_does_not_load_the_planner() -> None:
-    code = ("import sys, ehatp.check.validator, ehatp.policy_format; "
+    code = ("import sys, ehatp.check.validator, ehatp.formats.policy; "
             "print(sorted(m for m in sys.modules if m.startswith(('ehatp.search', "
             "'ehatp.epistemic', 'ehatp.tools'))))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,

@@ -13,9 +13,9 @@ from typer.testing import CliRunner
 
 import ehatp
 from ehatp import Policy
-from ehatp.tools import bt
-from ehatp.tools.cli import app
-from ehatp.tools.executor import Executor
+from ehatp.cli.app import app
+from ehatp.formats import bt
+from ehatp.run.executor import Executor
 
 from .conftest import DATA, EXAMPLES, EXAMPLES_DIR, Example, solved
 
@@ -247,7 +247,7 @@ def test_py_tree_reaches_the_goal_against_the_executor(example: Example) -> None
     py_trees_or_skip()
     from py_trees.common import Status
 
-    from ehatp.tools.bt_py_trees import HumanTurn, RobotCommand
+    from ehatp.formats.bt_py_trees import HumanTurn, RobotCommand
 
     problem, policy = solved(example)
     start = Executor(problem, policy)

@@ -14,10 +14,10 @@ import typer
 from typer.testing import CliRunner
 
 import ehatp
-from ehatp.policy_format import Policy
-from ehatp.tools import bench
-from ehatp.tools.cli import app
-from ehatp.tools.examples import example, examples_dir
+from ehatp.cli.app import app
+from ehatp.experiments import bench
+from ehatp.experiments.examples import example, examples_dir
+from ehatp.formats.policy import Policy
 
 from .conftest import TABLE1
 
@@ -29,7 +29,7 @@ runner = CliRunner()
 def cli(*args: str | Path) -> subprocess.CompletedProcess[str]:
     """Run the real console script, so stderr and tracebacks are what a user sees."""
     script = Path(sys.executable).with_name("ehatp")
-    cmd = [str(script)] if script.exists() else [sys.executable, "-m", "ehatp.tools.cli"]
+    cmd = [str(script)] if script.exists() else [sys.executable, "-m", "ehatp.cli"]
     return subprocess.run([*cmd, *map(str, args)], capture_output=True, text=True, timeout=60)
 
 

@@ -1,5 +1,5 @@
 """Every policy the planner returns also runs: it executes to the goal on every branch through the
-executor a robot uses (ehatp.tools.walk, docs/simulation.md), and its behaviour tree ticks to the
+executor a robot uses (ehatp.run.walk, docs/simulation.md), and its behaviour tree ticks to the
 goal in py_trees (docs/behaviour-trees.md). Planner and validator read the same rules, so they
 can agree on a policy that a robot cannot follow; the executor is a third reader."""
 
@@ -11,11 +11,11 @@ import pytest
 
 import ehatp
 from ehatp import Communication, Domain, HumanModel, Policy, Var
+from ehatp.formats import bt
 from ehatp.model.options import Intentions, Speech
 from ehatp.model.problem import Problem
-from ehatp.tools import bt
-from ehatp.tools.executor import Executor
-from ehatp.tools.walk import tick_py_trees, walk_policy
+from ehatp.run.executor import Executor
+from ehatp.run.walk import tick_py_trees, walk_policy
 
 from .conftest import EXAMPLES, Example, solved
 from .scenarios import problem as scenario
@@ -230,11 +230,12 @@ IPC_SLOW = ("2020-to-Childsnack", "2020-to-Minecraft-Player")
 @pytest.mark.parametrize("name", [*IPC_QUICK, *IPC_SLOW])
 def test_every_imported_ipc_domain_that_validates_walks_to_the_goal(name: str) -> None:
     pytest.importorskip("unified_planning", reason="ehatp[hddl] (unified-planning) not installed")
-    from ehatp.tools import hddl
+    from ehatp.experiments import hddl_report
+    from ehatp.formats import hddl
 
-    shipped = {n: (d, p) for n, d, p in hddl.domains_shipped()}
+    shipped = {n: (d, p) for n, d, p in hddl_report.domains_shipped()}
     d, pf = shipped[name]
-    # as the report imports them (hddl.check_domain): the human expects nothing of the robot
+    # as the report imports them (hddl_report.check_domain): the human expects nothing of the robot
     p = hddl.import_hddl(d, pf, sidecar=hddl.Sidecar(expects="nothing")).problem()
     result = ehatp.solve(p, timeout=120)
     assert result.policy is not None, result.reason

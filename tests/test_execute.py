@@ -15,9 +15,9 @@ from typing import Any
 import pytest
 
 import ehatp
-from ehatp.policy_format import Policy
-from ehatp.tools.execute import json_lines, run
-from ehatp.tools.executor import ExecutionError, Executor, UncoveredHumanAction
+from ehatp.formats.policy import Policy
+from ehatp.run.execute import json_lines, run
+from ehatp.run.executor import ExecutionError, Executor, UncoveredHumanAction
 
 from .conftest import EXAMPLES, EXAMPLES_DIR, ROOT, Example, solved
 
@@ -27,7 +27,7 @@ QUAL, QUAL_ASK = CUBES / "qualitative.toml", CUBES / "qualitative-ask.toml"
 
 def ehatp_cli(*args: str | Path, stdin: str) -> subprocess.CompletedProcess[str]:
     script = Path(sys.executable).with_name("ehatp")
-    cmd = [str(script)] if script.exists() else [sys.executable, "-m", "ehatp.tools.cli"]
+    cmd = [str(script)] if script.exists() else [sys.executable, "-m", "ehatp.cli"]
     return subprocess.run([*cmd, *map(str, args)], input=stdin, capture_output=True,
                           text=True, timeout=120)
 

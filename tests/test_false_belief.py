@@ -5,7 +5,7 @@ cheaper; with informing made expensive, deferral must win."""
 from __future__ import annotations
 
 import ehatp
-from ehatp.policy_format import PathStep, Policy
+from ehatp.formats.policy import PathStep, Policy
 
 from .conftest import EXAMPLES_DIR, example, solved
 from .scenarios import walk

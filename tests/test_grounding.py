@@ -118,10 +118,10 @@ def test_ground_ahead_is_a_problem_limit() -> None:
 
 
 def test_the_random_generator_draws_grounding_on_demand() -> None:
-    from ehatp.tools import randomgen
+    from ehatp.experiments import agreement, randomgen
 
     drawn = [randomgen.problem(seed).limits.ground_ahead for seed in range(100)]
     assert {0, 2, Limits.ground_ahead} == set(drawn)
     lazy = [seed for seed, a in enumerate(drawn) if a == 0][:20]
-    outcomes = [randomgen.check(seed, determinism=True) for seed in lazy]
+    outcomes = [agreement.check(seed, determinism=True) for seed in lazy]
     assert not [o for o in outcomes if o.failed], [o for o in outcomes if o.failed]

@@ -19,7 +19,8 @@ pytest.importorskip("unified_planning", reason="ehatp[hddl] (unified-planning) n
 pytestmark = [pytest.mark.filterwarnings("ignore:.*deprecated - use:DeprecationWarning"),
               pytest.mark.slow]
 
-from ehatp.tools import hddl  # noqa: E402
+from ehatp.experiments import hddl_report  # noqa: E402
+from ehatp.formats import hddl  # noqa: E402
 
 DATA = Path(__file__).parent / "data" / "hddl"
 ROOT = Path(__file__).resolve().parent.parent
@@ -67,7 +68,7 @@ def test_the_hddl_model_may_be_the_humans() -> None:
 
 def test_the_written_module_and_problem_are_what_solve_reads(tmp_path: Path) -> None:
     out = tmp_path / "toy.py"
-    r = subprocess.run([sys.executable, "-m", "ehatp.tools.cli", "import-hddl",
+    r = subprocess.run([sys.executable, "-m", "ehatp.cli", "import-hddl",
                         str(DATA / "transport-domain.hddl"), str(DATA / "transport-p1.hddl"),
                         "--out", str(out)], capture_output=True, text=True, cwd=tmp_path)
     assert r.returncode == 0, r.stderr
@@ -156,7 +157,7 @@ def test_what_cannot_map_is_one_line(tmp_path: Path) -> None:
         " (:htn :ordered-subtasks (and (go t))) (:init (= (fuel t) 3)))\n", encoding="utf-8")
     with pytest.raises(hddl.HddlUnsupported, match="numeric fluent fuel"):
         hddl.import_hddl(tmp_path / "d.hddl", tmp_path / "p.hddl")
-    r = subprocess.run([sys.executable, "-m", "ehatp.tools.cli", "import-hddl",
+    r = subprocess.run([sys.executable, "-m", "ehatp.cli", "import-hddl",
                         str(tmp_path / "d.hddl"), str(tmp_path / "p.hddl")],
                        capture_output=True, text=True, cwd=tmp_path)
     assert r.returncode == 2 and r.stderr.count("\n") == 1 and "numeric fluent" in r.stderr
@@ -170,11 +171,11 @@ def test_left_recursion_solves() -> None:
     """The IPC's transport reaches a place through itself (get-to before a drive): a task met
     again inside its own refinement before any action is a loop, closed (docs/semantics.md §1),
     so the drives taken are the paths without a repeated place; the policy validates."""
-    shipped = {n: (d, p) for n, d, p in hddl.domains_shipped()}
+    shipped = {n: (d, p) for n, d, p in hddl_report.domains_shipped()}
     d, p = shipped["2020-to-Transport"]
     r = ehatp.solve(hddl.import_hddl(d, p).problem())
     assert r.status == "solved" and r.policy is not None
-    row = hddl.check_domain("transport", d, p, timeout=30)
+    row = hddl_report.check_domain("transport", d, p, timeout=30)
     assert row.stage == "validated", row.reason
 
 
@@ -194,7 +195,7 @@ SLOW = ("2020-to-Childsnack", "2020-to-Minecraft-Player", "2020-to-Satellite-GTO
 def test_every_shipped_domain_maps_or_says_why() -> None:
     """Every HDDL domain unified-planning ships imports and builds (its domain and problem
     checked), or fails with one line naming what ehatp cannot express."""
-    shipped = hddl.domains_shipped()
+    shipped = hddl_report.domains_shipped()
     assert len(shipped) >= 20  # the IPC 2020 HTN track's domains, one problem each
     for name, d, p in shipped:
         try:
@@ -207,9 +208,9 @@ def test_every_shipped_domain_maps_or_says_why() -> None:
 @pytest.mark.parametrize("name", [*QUICK, *(pytest.param(n, marks=pytest.mark.slow)
                                              for n in SLOW)])
 def test_shipped_domains_solve_and_validate(name: str) -> None:
-    shipped = {n: (d, p) for n, d, p in hddl.domains_shipped()}
+    shipped = {n: (d, p) for n, d, p in hddl_report.domains_shipped()}
     d, p = shipped[name]
-    row = hddl.check_domain(name, d, p, timeout=120 if name in SLOW else 60)
+    row = hddl_report.check_domain(name, d, p, timeout=120 if name in SLOW else 60)
     assert row.stage == "validated", row
 
 

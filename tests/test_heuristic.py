@@ -12,13 +12,12 @@ from hypothesis import strategies as st
 
 import ehatp
 from ehatp import Costs, Domain, Var
+from ehatp.experiments import agreement, randomgen
 from ehatp.model.grounding import ground_problem
-from ehatp.search import heuristic
 from ehatp.search.andor import GOAL, search
 from ehatp.search.heuristic import INF, Heuristic, least_costs
 from ehatp.search.symmetry import detect
 from ehatp.search.values import knuth
-from ehatp.tools import randomgen
 
 from .conftest import EXAMPLES_DIR, TABLE1, Example
 from .scenarios import problem, walk
@@ -149,11 +148,10 @@ def test_fewer_states_with_the_bound_same_policy() -> None:
 
 # -- the same results -------------------------------------------------------------------------
 
-def _policy(p: ehatp.Problem, on: bool, monkeypatch: pytest.MonkeyPatch,
-            symmetry: bool | None = None) -> tuple[str, str]:
+def _policy(p: ehatp.Problem, on: bool, symmetry: bool | None = None) -> tuple[str, str]:
     """The status and the policy's JSON without its statistics (states counted differ)."""
-    monkeypatch.setattr(heuristic, "OVERRIDE", on)
-    r = ehatp.solve(p, max_states=randomgen.MAX_STATES, timeout=10, symmetry=symmetry)
+    r = ehatp.solve(p, max_states=agreement.MAX_STATES, timeout=10, symmetry=symmetry,
+                    heuristic=on)
     if r.policy is None:
         return r.status, r.reason
     data = json.loads(r.policy.to_json())
@@ -162,20 +160,18 @@ def _policy(p: ehatp.Problem, on: bool, monkeypatch: pytest.MonkeyPatch,
 
 
 @pytest.mark.parametrize("example", TABLE1, ids=str)
-def test_table1_policies_do_not_change(example: Example, monkeypatch: pytest.MonkeyPatch
-                                       ) -> None:
+def test_table1_policies_do_not_change(example: Example) -> None:
     p = ehatp.load(example.path)
     for symmetry in (True, False):
-        assert _policy(p, True, monkeypatch, symmetry) == _policy(p, False, monkeypatch,
-                                                                  symmetry)
+        assert _policy(p, True, symmetry) == _policy(p, False, symmetry)
 
 
 @pytest.mark.slow  # 300 random problems, each solved twice
-def test_random_policies_do_not_change(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_random_policies_do_not_change() -> None:
     compared = 0
     for seed in range(300):
         p = randomgen.problem(seed)
-        on, off = _policy(p, True, monkeypatch), _policy(p, False, monkeypatch)
+        on, off = _policy(p, True), _policy(p, False)
         if "limit" in on[0] or "limit" in off[0] or on[0] == "timeout" or off[0] == "timeout":
             continue
         assert on == off, seed
@@ -210,7 +206,7 @@ def test_the_bound_never_overestimates(seed: int) -> None:
     p = randomgen.problem(seed)
     g = ground_problem(p)
     h = Heuristic(g)
-    out = search(g, max_states=randomgen.MAX_STATES, timeout=10, heuristic=True)
+    out = search(g, max_states=agreement.MAX_STATES, timeout=10, heuristic=True)
     gr = out.graph
     if out.status == "solved":
         assert out.values is not None

@@ -46,7 +46,7 @@ def shelf_problem(**kw: object) -> ehatp.Problem:
 def runs(p: ehatp.Problem, result: ehatp.Result) -> None:
     """Whatever solves also runs: the policy validates and is walked through the Executor on
     every branch to the goal."""
-    from ehatp.tools.walk import walk_policy
+    from ehatp.run.walk import walk_policy
 
     assert result.policy is not None
     assert ehatp.validate(p, result.policy).ok

@@ -14,10 +14,10 @@ from typing import Any
 import pytest
 
 import ehatp
+from ehatp.experiments.bench import GridPoint
 from ehatp.model.problem import parse_size
 from ehatp.search import andor, values
 from ehatp.search.limits import Budget, LimitReached
-from ehatp.tools.bench import GridPoint
 
 CUBES = Path(__file__).resolve().parents[1] / "examples" / "cubes"
 # about 200k distinct states and a few seconds of search: far more than the limits below allow
@@ -94,18 +94,19 @@ def test_cli_timeout_during_writing_writes_nothing(monkeypatch: pytest.MonkeyPat
                                                    tmp_path: Path) -> None:
     from typer.testing import CliRunner
 
-    from ehatp.tools import cli
+    from ehatp.cli import solve as solve_command
+    from ehatp.cli.app import app
 
-    real = cli.solve
+    real = solve_command.solve
 
     def solve_then_wait(*args: Any, **kwargs: Any) -> Any:
         out = real(*args, **kwargs)
         time.sleep(2.2)  # past the time limit (1.5 s + 5 % + 0.5 s) before writing starts
         return out
 
-    monkeypatch.setattr(cli, "solve", solve_then_wait)
+    monkeypatch.setattr(solve_command, "solve", solve_then_wait)
     target = tmp_path / "p.json"
-    r = CliRunner().invoke(cli.app, ["solve", str(CUBES / "p1.toml"), "--timeout", "1.5",
+    r = CliRunner().invoke(app, ["solve", str(CUBES / "p1.toml"), "--timeout", "1.5",
                                      "--out", str(target)])
     assert r.exit_code == 1, r.output
     assert "time limit of 1.5 s" in r.stdout.splitlines()[0]
@@ -166,7 +167,7 @@ def test_memory_limit_below_the_start_stops_at_once() -> None:
 def _cli(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
     src = str(Path(__file__).resolve().parents[1] / "src")
     env = {**os.environ, "PYTHONPATH": src + os.pathsep + os.environ.get("PYTHONPATH", "")}
-    return subprocess.run([sys.executable, "-m", "ehatp.tools.cli", *args], cwd=cwd, env=env,
+    return subprocess.run([sys.executable, "-m", "ehatp.cli", *args], cwd=cwd, env=env,
                           capture_output=True, text=True, timeout=120)
 
 
@@ -237,21 +238,22 @@ def test_cli_progress_line_covers_writing(monkeypatch: pytest.MonkeyPatch,
     from rich.console import Console
     from typer.testing import CliRunner
 
-    from ehatp.tools import cli
+    from ehatp.cli import solve as solve_command
+    from ehatp.cli.app import app
 
     shown: list[str] = []
-    real_render = cli.LiveProgress.render
+    real_render = solve_command.LiveProgress.render
 
-    def render(self: cli.LiveProgress, stats: andor.Stats, frontier: int) -> Any:
+    def render(self: solve_command.LiveProgress, stats: andor.Stats, frontier: int) -> Any:
         text = real_render(self, stats, frontier)
         shown.append(stats.phase if stats.phase != "search" else text.plain)
         return text
 
-    monkeypatch.setattr(cli, "SHOW_PROGRESS_AFTER_S", 0.0)
-    monkeypatch.setattr(cli.LiveProgress, "render", render)
-    monkeypatch.setattr(cli, "stderr_console",
+    monkeypatch.setattr(solve_command, "SHOW_PROGRESS_AFTER_S", 0.0)
+    monkeypatch.setattr(solve_command.LiveProgress, "render", render)
+    monkeypatch.setattr(solve_command, "stderr_console",
                         lambda: Console(file=io.StringIO(), force_terminal=True))
-    r = CliRunner().invoke(cli.app, ["solve", str(CUBES / "p4.toml"), "--out",
+    r = CliRunner().invoke(app, ["solve", str(CUBES / "p4.toml"), "--out",
                                      str(tmp_path / "p.json")])
     assert r.exit_code == 0, r.output
     assert shown[0] == "grounding" and "writing" in shown and "extraction" in shown

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import ehatp
 from ehatp import Domain, HumanModel, Passes, Var, observable
-from ehatp.policy_format import Policy, PolicyNode
+from ehatp.formats.policy import Policy, PolicyNode
 
 from .scenarios import problem
 

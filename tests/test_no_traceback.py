@@ -17,9 +17,10 @@ from typer.testing import CliRunner
 
 import ehatp
 from ehatp import DomainError, EhatpError, InputError, Problem
+from ehatp.cli import solve as solve_command
+from ehatp.cli.app import app
+from ehatp.cli.common import user_errors
 from ehatp.domains.cubes import make_domain
-from ehatp.tools import cli
-from ehatp.tools.common import user_errors
 
 ROOT = Path(__file__).resolve().parents[1]
 CUBES = ROOT / "examples" / "cubes"
@@ -30,13 +31,13 @@ runner = CliRunner()
 def run(*args: str | Path) -> subprocess.CompletedProcess[str]:
     """The real console script, so what reaches the terminal is what a user sees."""
     script = Path(sys.executable).with_name("ehatp")
-    cmd = [str(script)] if script.exists() else [sys.executable, "-m", "ehatp.tools.cli"]
+    cmd = [str(script)] if script.exists() else [sys.executable, "-m", "ehatp.cli"]
     return subprocess.run([*cmd, *map(str, args)], capture_output=True, text=True, timeout=120)
 
 
 def invoke(*args: str | Path) -> tuple[int, str, str]:
     """The CLI in-process; an exception escaping it would be a traceback for a user."""
-    r = runner.invoke(cli.app, [str(a) for a in args])
+    r = runner.invoke(app, [str(a) for a in args])
     assert r.exception is None or isinstance(r.exception, SystemExit), repr(r.exception)
     return r.exit_code, r.stdout, r.stderr
 
@@ -297,14 +298,14 @@ def test_an_internal_error_is_one_line_naming_the_details_file(
     def broken(*args: object, **kwargs: object) -> None:
         raise ZeroDivisionError("planted bug")
 
-    monkeypatch.setattr(cli, "solve", broken)
+    monkeypatch.setattr(solve_command, "solve", broken)
     line = one_line(invoke("solve", P1), code=3)
     m = re.fullmatch(r"internal error: ZeroDivisionError: planted bug; .*details in (\S+) .*",
                      line)
     assert m, line
     details = Path(m.group(1)).read_text(encoding="utf-8")
     assert "Traceback" in details and "planted bug" in details and "solve" in details
-    r = runner.invoke(cli.app, ["--debug", "solve", str(P1)])
+    r = runner.invoke(app, ["--debug", "solve", str(P1)])
     assert r.exit_code == 3 and "Traceback" in r.stderr
     assert r.stderr.strip().splitlines()[-1].startswith("internal error: ZeroDivisionError")
 
@@ -329,7 +330,7 @@ def test_a_problem_file_cannot_call_os_mkdir(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(("ref", "code", "expect"), [
-    ("ehatp.model.problem:load", None, "neither a Domain nor a function marked"),
+    ("ehatp.formats.problem_toml:load", None, "neither a Domain nor a function marked"),
     ("mydomain.py:make", "def make():\n    open('CALLED', 'w')\n",
      "neither a Domain nor a function marked"),
     ("../mydomain.py:domain", None, "not inside the problem file's folder"),

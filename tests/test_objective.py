@@ -13,10 +13,10 @@ from typer.testing import CliRunner
 
 import ehatp
 from ehatp import Communication, Costs, Domain, Objective, ObjectiveKind, Problem, Speech
-from ehatp.policy_format import Policy
+from ehatp.cli.app import app
+from ehatp.experiments.examples import examples_dir
+from ehatp.formats.policy import Policy
 from ehatp.search.planner import Result
-from ehatp.tools.cli import app
-from ehatp.tools.examples import examples_dir
 
 from .conftest import EXAMPLES, Example
 from .scenarios import lab_domain, problem

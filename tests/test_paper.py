@@ -8,8 +8,8 @@ import pytest
 
 import ehatp
 from ehatp import Passes
+from ehatp.formats.policy import Policy
 from ehatp.model.grounding import ground_problem
-from ehatp.policy_format import Policy
 from ehatp.search.andor import search
 
 from .conftest import EXAMPLES, EXAMPLES_DIR, Example, example, solved

@@ -414,7 +414,7 @@ def test_uncertain_human_anticipation_is_validated() -> None:
 def test_the_random_generator_draws_partial_orders() -> None:
     """Some random problems have unordered and partially ordered methods, for either agent,
     and planner and validator agree on them (benchmarks/agreement.py runs many more)."""
-    from ehatp.tools import randomgen
+    from ehatp.experiments import agreement, randomgen
 
     with_po = []
     kinds: set[str] = set()
@@ -428,7 +428,7 @@ def test_the_random_generator_draws_partial_orders() -> None:
             with_po.append(seed)
     assert kinds == {"robot:unordered", "robot:partial", "human:unordered", "human:partial"}
     assert 40 <= len(with_po) <= 150
-    outcomes = [randomgen.check(seed, determinism=True) for seed in with_po[:25]]
+    outcomes = [agreement.check(seed, determinism=True) for seed in with_po[:25]]
     assert not [o for o in outcomes if o.failed], [o for o in outcomes if o.failed]
     assert sum(o.kind == "solved" for o in outcomes) >= 8
 
@@ -436,7 +436,7 @@ def test_the_random_generator_draws_partial_orders() -> None:
 def test_the_random_generator_draws_loops() -> None:
     """Some random problems give the robot's (and the human's) task a method that refines
     the task itself first, some inside a block; planner and validator agree on them."""
-    from ehatp.tools import randomgen
+    from ehatp.experiments import agreement, randomgen
 
     with_loop, in_block, human = [], 0, 0
     for seed in range(300):
@@ -447,6 +447,6 @@ def test_the_random_generator_draws_loops() -> None:
             in_block += any(me.order is not None for me in loops)
             human += any(me.task == "chore" for me in spec.human.methods if me.name == "loop")
     assert 20 <= len(with_loop) <= 80 and in_block and human
-    outcomes = [randomgen.check(seed, determinism=True) for seed in with_loop[:25]]
+    outcomes = [agreement.check(seed, determinism=True) for seed in with_loop[:25]]
     assert not [o for o in outcomes if o.failed], [o for o in outcomes if o.failed]
     assert sum(o.kind == "solved" for o in outcomes) >= 5

@@ -17,9 +17,9 @@ from typer.testing import CliRunner
 import ehatp
 from ehatp import Policy
 from ehatp.check.validator import validate
-from ehatp.policy_format import PolicyMove
-from ehatp.tools.cli import app
-from ehatp.tools.common import read_policy
+from ehatp.cli.app import app
+from ehatp.cli.common import read_policy
+from ehatp.formats.policy import PolicyMove
 
 from .conftest import DATA, EXAMPLES, EXAMPLES_DIR, ROOT, Example, solved
 from .policy_v1 import tree_dict

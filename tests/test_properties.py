@@ -1,4 +1,4 @@
-"""Property tests on random problems (``ehatp.tools.randomgen``, seeds drawn by hypothesis):
+"""Property tests on random problems (``ehatp.experiments.randomgen``, seeds drawn by hypothesis):
 the planner never crashes, every policy it returns passes the independent validator, executes to
 the goal on every branch through the Executor and never branches on a choice the robot cannot
 see, the result does not depend on declaration order, and solving twice gives byte-identical
@@ -13,13 +13,13 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import ehatp
-from ehatp.policy_format import Policy
-from ehatp.tools import randomgen
-from ehatp.tools.walk import walk_policy
+from ehatp.experiments import agreement, randomgen
+from ehatp.formats.policy import Policy
+from ehatp.run.walk import walk_policy
 
 SETTINGS = settings(max_examples=120, deadline=None, derandomize=True,
                     suppress_health_check=[HealthCheck.too_slow])
-LIMITS = {"max_states": randomgen.MAX_STATES, "timeout": 10}
+LIMITS = {"max_states": agreement.MAX_STATES, "timeout": 10}
 
 
 @pytest.mark.slow  # 120 random problems
@@ -37,8 +37,8 @@ def test_policies_pass_the_validator_execute_and_do_not_depend_on_declaration_or
     report = ehatp.validate(p, r.policy)
     assert report.ok, report.message
     read = Policy.from_dict(json.loads(r.policy.to_json()))  # as its file reads
-    assert randomgen.hidden_choices(read) == []
-    walk = walk_policy(p, read, cap=randomgen.WALK_CAP)
+    assert agreement.hidden_choices(read) == []
+    walk = walk_policy(p, read, cap=agreement.WALK_CAP)
     assert walk.ok, walk.message
     assert walk.branches >= 1
     again = ehatp.solve(randomgen.problem(seed, reverse=True), **LIMITS)  # type: ignore[arg-type]

@@ -1,7 +1,7 @@
 """``relevance = "plan"`` never solves fewer problems than ``"next"`` (docs/semantics.md §5):
 where no informing set within the size bound fixes the rest of the human's plan, the sets that
 fix its next step remain robot options. Checked on the random generator's problems
-(``ehatp.tools.randomgen``), each solved with relevance forced one way, then the other."""
+(``ehatp.experiments.randomgen``), each solved with relevance forced one way, then the other."""
 
 from __future__ import annotations
 
@@ -11,10 +11,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from ehatp.experiments import agreement, randomgen
 from ehatp.model.options import Relevance
 from ehatp.model.problem import Problem
 from ehatp.search.planner import LIMITS, Result, solve
-from ehatp.tools import randomgen
 
 # seed 452: with informing sets of one atom, "plan" left it unsolved before issue 15 (the first
 # such seed in 1,500, with this version of the generator)
@@ -26,8 +26,8 @@ def _solve(p: Problem, relevance: Relevance, max_atoms: int | None = None) -> Re
     c = replace(p.communication, relevance=relevance)
     if max_atoms is not None:
         c = replace(c, inform_max_atoms=max_atoms)
-    return solve(replace(p, communication=c), max_states=randomgen.MAX_STATES,
-                 timeout=randomgen.TIMEOUT)
+    return solve(replace(p, communication=c), max_states=agreement.MAX_STATES,
+                 timeout=agreement.TIMEOUT)
 
 
 def _plan_solves_what_next_solves(seed: int, max_atoms: int | None) -> bool | None:

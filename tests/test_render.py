@@ -16,8 +16,9 @@ import pytest
 import typer
 from typer.testing import CliRunner
 
-from ehatp.policy_format import Policy, PolicyMove, PolicyNode
-from ehatp.tools import render as rd
+from ehatp.cli.app import app
+from ehatp.formats import render as rd
+from ehatp.formats.policy import Policy, PolicyMove, PolicyNode
 
 from .conftest import CUBES_TABLE1, DATA, solved
 
@@ -39,14 +40,7 @@ def policy_files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
 
 
 def cli() -> typer.Typer:
-    app = typer.Typer()
-
-    @app.callback()
-    def _main() -> None:  # a callback keeps `render` a subcommand, as in the real CLI
-        pass
-
-    rd.register(app)
-    return app
+    return app  # the real command line: `render` is one of its commands
 
 
 def run(*args: str) -> Any:

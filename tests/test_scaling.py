@@ -15,9 +15,9 @@ import pytest
 from typer.testing import CliRunner
 
 import ehatp
+from ehatp.cli.app import app
 from ehatp.domains import cooking, cubes
-from ehatp.tools import bench
-from ehatp.tools.cli import app
+from ehatp.experiments import bench
 
 ROOT = Path(__file__).resolve().parents[1]
 runner = CliRunner()
@@ -157,7 +157,7 @@ def test_live_worst_case_values_are_knuths_after_every_expansion(
 
 @pytest.mark.slow  # random problems, each searched with the live values checked
 def test_live_values_on_random_problems(monkeypatch: pytest.MonkeyPatch) -> None:
-    from ehatp.tools import randomgen
+    from ehatp.experiments import randomgen
 
     # every option varies on these (speech openings with their zero-cost silence included)
     checked = [_check_live_values(monkeypatch, randomgen.problem(seed), max_states=3000)

@@ -10,14 +10,9 @@ import typer
 from typer.testing import CliRunner
 
 import ehatp
-from ehatp.policy_format import PathStep, Policy
-from ehatp.tools.executor import (
-    ExecutionError,
-    Executor,
-    PolicyMismatch,
-    UncoveredHumanAction,
-)
-from ehatp.tools.simulate import register
+from ehatp.cli.app import app as ehatp_app
+from ehatp.formats.policy import PathStep, Policy
+from ehatp.run.executor import ExecutionError, Executor, PolicyMismatch, UncoveredHumanAction
 
 from .conftest import EXAMPLES, EXAMPLES_DIR, Example, solved
 
@@ -29,14 +24,7 @@ WORLDS = re.compile(r"^  \S+ knows the truth; \S+ now entertains (\d+) worlds?")
 
 
 def app() -> typer.Typer:
-    a = typer.Typer()
-    register(a)
-
-    @a.callback()
-    def main() -> None:  # a callback keeps `simulate` a subcommand, as in the real CLI
-        pass
-
-    return a
+    return ehatp_app  # the real command line: `simulate` is one of its commands
 
 
 def invoke(*args: str, input: str | None = None) -> tuple[int, str]:

@@ -18,11 +18,11 @@ import pytest
 from typer.testing import CliRunner
 
 import ehatp
-from ehatp.model.problem import load
-from ehatp.policy_format import Policy, num
-from ehatp.tools import sweep
-from ehatp.tools.cli import app
-from ehatp.tools.examples import examples_dir
+from ehatp.cli.app import app
+from ehatp.experiments import sweep
+from ehatp.experiments.examples import examples_dir
+from ehatp.formats.policy import Policy, num
+from ehatp.formats.problem_toml import load
 
 CUBES = examples_dir() / "cubes"
 runner = CliRunner()

@@ -10,12 +10,13 @@ import pytest
 
 from ehatp.check.validator import validate
 from ehatp.epistemic.state import EState
+from ehatp.experiments.bench import GridPoint
+from ehatp.formats.problem_toml import load, loads
 from ehatp.model.grounding import ground_problem
-from ehatp.model.problem import Problem, load, loads
+from ehatp.model.problem import Problem
 from ehatp.search.andor import search
 from ehatp.search.planner import solve
 from ehatp.search.symmetry import Symmetry, describe_classes, detect
-from ehatp.tools.bench import GridPoint
 
 from .conftest import EXAMPLES, ROOT, Example
 

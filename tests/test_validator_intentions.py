@@ -23,8 +23,8 @@ from ehatp import (
     Var,
 )
 from ehatp.check.validator import _Semantics
+from ehatp.formats.policy import FORMAT
 from ehatp.model.options import Intentions
-from ehatp.policy_format import FORMAT
 
 from .scenarios import lab_domain, problem
 from .test_validator_options import caught, ok, split_top

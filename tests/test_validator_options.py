@@ -25,7 +25,7 @@ from ehatp import (
     Speech,
 )
 from ehatp.check.validator import Report, _Semantics, validate
-from ehatp.policy_format import FORMAT
+from ehatp.formats.policy import FORMAT
 
 from .policy_v1 import tree_dict
 from .scenarios import lab_domain, problem

@@ -27,8 +27,8 @@ from ehatp import (
 from ehatp.check.validator import _Semantics as VSemantics
 from ehatp.epistemic.semantics import Semantics
 from ehatp.epistemic.state import normalize
+from ehatp.formats.problem_toml import loads
 from ehatp.model.grounding import ground_problem
-from ehatp.model.problem import loads
 
 from .conftest import CUBES_TABLE1, EXAMPLES_DIR, ROOT, example, solved
 
@@ -399,7 +399,7 @@ def test_the_cube_domain_refuses_an_unknown_encoding() -> None:
 def test_the_random_generator_draws_variables_and_counters() -> None:
     """benchmarks/agreement.py's problems include state variables (seen whole, or per value)
     and counters, and planner and validator agree on them."""
-    from ehatp.tools import randomgen
+    from ehatp.experiments import agreement, randomgen
 
     drawn = [randomgen.draw(seed) for seed in range(1000)]
     kinds = {(v.kind, v.sight) for s in drawn for v in s.values}
@@ -413,7 +413,7 @@ def test_the_random_generator_draws_variables_and_counters() -> None:
     with_values = [s.seed for s in drawn if s.values][:80]
     p = randomgen.build(randomgen.draw(with_values[0]))
     assert p.domain.variables or p.domain.counters
-    outcomes = randomgen.run(with_values, jobs=2)
+    outcomes = agreement.run(with_values, jobs=2)
     bad = [f"{o.seed}: {o.kind} {o.detail}" for o in outcomes if o.failed]
     assert not bad, bad
     assert sum(o.kind == "solved" for o in outcomes) >= len(with_values) // 3
