@@ -17,7 +17,7 @@ from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from ..formats.policy import Policy
+from ..formats.policy import Policy, label_key
 from ..search.limits import SolveStatus
 from .randomgen import build, draw
 
@@ -89,7 +89,7 @@ def hidden_choices(policy: Policy) -> list[str]:
             continue
         seen: dict[str, int] = {}
         for m in n.moves:
-            key = "".join(m.action.split())
+            key = label_key(m.action)
             if key in seen:
                 out.append(f"node {n.id}: {human} {m.action} twice (to nodes {seen[key]} and "
                            f"{m.to})")

@@ -31,6 +31,7 @@ from py_trees.common import Status
 from py_trees.composites import Selector, Sequence
 
 from .bt_tree import SEP, BTNode, Forest
+from .policy import label_key
 
 
 @dataclass(frozen=True)
@@ -91,7 +92,7 @@ def _key(port: str) -> str:
 
 
 def _same(a: str, b: str) -> bool:
-    return "".join(a.split()) == "".join(b.split())
+    return label_key(a) == label_key(b)
 
 
 def _status(done: bool | None) -> Status:

@@ -490,6 +490,12 @@ def _nodes_v1(raw: list[Any]) -> list[PolicyNode]:
     return nodes
 
 
+def label_key(label: str) -> str:
+    """A move label as labels are compared: spaces do not count (``place(r,box1)`` is
+    ``place(r, box1)``)."""
+    return "".join(label.split())
+
+
 def num(c: Cost | float) -> int | float:
     if isinstance(c, Fraction):
         return int(c) if c.denominator == 1 else float(c)
@@ -519,5 +525,5 @@ def timeline(policy: Policy, branch: Branch) -> dict[str, Any]:
 
 
 __all__ = ["COMM_KINDS", "FORMAT", "POLICY_FIX", "READS", "VERSION", "Branch", "Cost", "malformed",
-           "PathStep", "Policy", "PolicyMove", "PolicyNode", "num", "timeline",
+           "PathStep", "Policy", "PolicyMove", "PolicyNode", "label_key", "num", "timeline",
            "topological_order"]

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from ..errors import ExecutionError, PolicyMismatch, UncoveredHumanAction
-from ..formats.policy import num
+from ..formats.policy import label_key, num
 from .executor import Action, Executor, Step
 
 EXIT_GOAL, EXIT_STOPPED, EXIT_BAD = 0, 1, 2
@@ -166,7 +166,7 @@ class Session:
             # policy leave out included, docs/semantics.md §4), is replanned from; only a move
             # that is impossible here (or fails) is an error
             replannable = self.replan and any(
-                "".join(m.label.split()) == "".join(e.action.split()) and m.child is not None
+                label_key(m.label) == label_key(e.action) and m.child is not None
                 for m in ex.legal_human_moves())
             if not replannable:
                 self.error("uncovered", str(e), line, action=e.action, expected=e.expected,

@@ -43,7 +43,7 @@ from ..errors import (
     PolicyMismatch,
     UncoveredHumanAction,
 )
-from ..formats.policy import Policy, PolicyMove, PolicyNode
+from ..formats.policy import Policy, PolicyMove, PolicyNode, label_key
 from ..model.formula import conj
 from ..model.grounding import Grounded, ground_problem
 from ..model.htn import Agenda
@@ -127,10 +127,6 @@ class _TracingSemantics(Semantics):
         return out
 
 
-def _norm(label: str) -> str:
-    return "".join(label.split())
-
-
 def human_agendas(es: EState) -> tuple[Agenda, ...]:
     """Return the human agendas the robot cannot tell apart at ``es`` (docs/semantics.md §3,
     "What the robot observes"): the one place the executor reads them."""
@@ -208,7 +204,7 @@ class Executor:
                                  + ("the task is done" if self.done
                                     else f"{self.human_name} is to move"))
         move, edge = self._robot_move()
-        if label is not None and _norm(self.strip_agent(label)) != _norm(move.label):
+        if label is not None and label_key(self.strip_agent(label)) != label_key(move.label):
             raise ExecutionError(f"{self.robot_name} reports {label!r} but the policy says "
                                  f"{move.label}")
         return self._advance(move, edge)
@@ -480,8 +476,8 @@ class Executor:
         -- the one whose child is the state the policy records at node ``edge.to``
         (:meth:`differences`), never merely the first with that label. Raises
         :class:`PolicyMismatch` when there is none: the policy does not fit the problem."""
-        want = _norm(edge.action)
-        same = [m for m in self._moves(es) if _norm(m.label) == want]
+        want = label_key(edge.action)
+        same = [m for m in self._moves(es) if label_key(m.label) == want]
         to = self.policy.nodes[edge.to]
         fit = [m for m in same if m.child is not None and not self.differences(m.child, to)]
         if len(fit) > 1:  # equal on what the node records in short: its worlds decide
@@ -562,9 +558,9 @@ class Executor:
     def _legal_move(self, label: str) -> Move:
         """The human's move ``label`` among :meth:`legal_human_moves`; raises
         :class:`UncoveredHumanAction` when it is none of them or fails (a false belief)."""
-        want, who = _norm(label), self.human_name
+        want, who = label_key(label), self.human_name
         legal = self.legal_human_moves()
-        same = [m for m in legal if _norm(m.label) == want]
+        same = [m for m in legal if label_key(m.label) == want]
         move = next((m for m in same if m.child is not None), None)
         if move is None:
             possible = [m.label for m in legal]
@@ -582,14 +578,14 @@ class Executor:
         """The human's move ``label`` along the policy's edge for it (None within the
         opening); raises :class:`UncoveredHumanAction` when the policy does not cover it."""
         move = self._legal_move(label)
-        want = _norm(move.label)
+        want = label_key(move.label)
         if self.node is None:
             opening = self._follow(self._opening[0])
-            if _norm(opening.label) == want:
+            if label_key(opening.label) == want:
                 return opening, None
             where = "the problem's fixed opening"
         else:
-            edge = next((pm for pm in self.node.moves if _norm(pm.action) == want), None)
+            edge = next((pm for pm in self.node.moves if label_key(pm.action) == want), None)
             if edge is not None:
                 return self.edge_move(self.node, edge), edge
             where = f"policy node {self.node.id}"

@@ -18,6 +18,7 @@ from typing import TextIO
 
 from ..epistemic.semantics import Move
 from ..errors import ExecutionError, InputError, PolicyMismatch, UncoveredHumanAction
+from ..formats.policy import label_key
 from ..formats.policy_check import read_policy
 from ..formats.problem_toml import load
 from ..formats.text import print_notes
@@ -66,10 +67,6 @@ def read_script(path: Path, robot: str, human: str) -> list[ScriptLine]:
     return out
 
 
-def _same(a: str, b: str) -> bool:
-    return "".join(a.split()) == "".join(b.split())
-
-
 class ScriptedHuman:
     """Plays the script's human moves in order and checks its robot lines."""
 
@@ -80,7 +77,7 @@ class ScriptedHuman:
         if self.pos < len(self.lines) and self.lines[self.pos].agent == ex.robot_name:
             ln = self.lines[self.pos]
             self.pos += 1
-            if not _same(ln.label, label):
+            if not label_key(ln.label) == label_key(label):
                 raise Stop(f"{self.path}:{ln.number}: the script expects {ex.robot_name} "
                            f"{ln.label}, the policy does {label}")
 
@@ -95,7 +92,7 @@ class ScriptedHuman:
             raise InputError(str(self.path), str(ln.number),
                              f"{ex.robot_name} {ln.label} is given where {ex.human_name} must "
                              "move", f"give one of: {', '.join(m.label for m in moves)}")
-        if not any(_same(m.label, ln.label) for m in moves):
+        if not any(label_key(m.label) == label_key(ln.label) for m in moves):
             raise InputError(str(self.path), str(ln.number),
                              f"{ln.label!r} is not a move of {ex.human_name} here",
                              f"give one of: {', '.join(m.label for m in moves)}")
@@ -113,13 +110,13 @@ def asking_human(stdin: TextIO, out: Callable[[str], None]) -> Chooser:
     """Lists the human's options and reads a number or a label per line of ``stdin``."""
 
     def choose(ex: Executor, moves: list[Move]) -> str:
-        covered = {"".join(a.label.split()) for a in ex.expected_human_actions()}
+        covered = {label_key(a.label) for a in ex.expected_human_actions()}
         out(f"  {ex.human_name} to move; options:")
         for i, m in enumerate(moves, 1):
             note = ""
             if m.child is None:
                 note = f"  (fails: {m.failure})"
-            elif "".join(m.label.split()) not in covered:
+            elif label_key(m.label) not in covered:
                 note = "  (not covered by the policy)"
             out(f"    {i}) {m.label}{note}")
         while True:
@@ -132,7 +129,7 @@ def asking_human(stdin: TextIO, out: Callable[[str], None]) -> Chooser:
             if answer.isdigit() and 1 <= int(answer) <= len(moves):
                 return moves[int(answer) - 1].label
             for m in moves:
-                if _same(m.label, ex.strip_agent(answer)):
+                if label_key(m.label) == label_key(ex.strip_agent(answer)):
                     return m.label
             numbers = "1" if len(moves) == 1 else f"a number from 1 to {len(moves)}"
             out(f"  not an option: {answer!r}; type {numbers} or a label")

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ExecutionError
-from ..formats.policy import Policy
+from ..formats.policy import Policy, label_key
 from ..model.problem import Problem
 from .executor import Executor
 
@@ -79,7 +79,7 @@ def walk_policy(problem: Problem, policy: Policy, *, cap: int = DEFAULT_CAP) -> 
                     continue
                 assert ex.node is not None
                 labels = [m.action for m in ex.node.moves]
-                norm = ["".join(x.split()) for x in labels]
+                norm = [label_key(x) for x in labels]
                 if len(set(norm)) != len(norm):
                     dup = next(x for x, n in zip(labels, norm, strict=True) if norm.count(n) > 1)
                     raise ExecutionError(
@@ -186,7 +186,7 @@ class _TreeCheck:
             if cmd.completes is None:
                 return True
             want = ex.next_robot_action()
-            if want is None or "".join(want.label.split()) != "".join(cmd.completes.split()):
+            if want is None or label_key(want.label) != label_key(cmd.completes):
                 self.fail(f"the tree's robot does {cmd.completes}, the executor says "
                           f"{'nothing (not the robot turn)' if want is None else want.label}")
                 return False
