@@ -164,7 +164,7 @@ def test_goal_with_children() -> None:
         leaf = node(d, goal=True)
         leaf["children"] = [node(d, agent="R", kind="wait")["id"]]
 
-    caught(problem, mutated(policy, edit), "a goal (section 6) must be a leaf")
+    caught(problem, mutated(policy, edit), "a goal (§6) must be a leaf")
 
 
 def test_wrong_cost_on_a_node() -> None:

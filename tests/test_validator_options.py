@@ -448,7 +448,7 @@ def test_speech_mutations() -> None:
         d["nodes"][1]["told"] = []
 
     caught(p, mutated(policy, edit_told), said,
-           "told is [], but the move says ['secret(a)'] (speech, section 5)")
+           "told is [], but the move says ['secret(a)'] (speech, §5)")
 
     def edit_cost(d: dict[str, Any]) -> None:
         d["nodes"][1]["cost"] = 1
@@ -513,7 +513,7 @@ def test_the_opening_offers_only_inform_and_silence() -> None:
         d["nodes"][1].update(kind="wait", action="wait", name="wait", args=[])
 
     caught(p, mutated(build(p, opening_robot()), edit), "branch [R wait]",
-           "at the speech opening (section 5) the robot may only inform or stay silent, not "
+           "at the speech opening (§5) the robot may only inform or stay silent, not "
            "wait")
 
     def edit_late(d: dict[str, Any]) -> None:
@@ -613,7 +613,7 @@ def test_expected_value_mutations() -> None:
         return lambda d: d.__setitem__(key, value)
 
     caught(p, mutated(good, edit("worst_case", 4)),
-           "policy worst_case is 4, but the policy's worst-case cost is 5 (section 7)")
+           "policy worst_case is 4, but the policy's worst-case cost is 5 (§7)")
     caught(p, mutated(good, edit("expected", 4)),
            "policy expected is 4, but the policy's expected cost is 3.666")
     caught(p, mutated(good, edit("cost", 5)), "policy cost is 5, but the root's value is 3.666")

@@ -43,9 +43,9 @@ def _differences(a: EState, b: EState, sem: Semantics) -> str:
         if i != j:
             out.append(f"{what} is {i} then, {j} now")
     if a.forced != b.forced:
-        out.append("the robot's last wait was forced on one path only (section 4)")
+        out.append("the robot's last wait was forced on one path only (§4)")
     if a.opening != b.opening:
-        out.append("it is the speech opening on one path only (section 5)")
+        out.append("it is the speech opening on one path only (§5)")
     if a.answering != b.answering:
         out.append("the human answers the robot's question on one path only (§5)")
     return "; ".join(out)
@@ -114,17 +114,17 @@ class Replay:
             if label == SILENCE:
                 return [sem.silence(es)]
             if not label.startswith("inform(") or " + " in label:
-                return f"at the speech opening (section 5) the robot may only inform or stay " \
+                return f"at the speech opening (§5) the robot may only inform or stay " \
                        f"silent, not {label}"
             r = self.inform_atoms(es, label)
             return r if isinstance(r, str) else [sem.inform(es, r)]
         if label == SILENCE:
             return "silence is a move only at the speech opening, before the human's first " \
-                   "move (section 5)"
+                   "move (§5)"
         if " + " in label:
             if self.problem.communication.speech != Speech.WITH_ACTION:
                 return 'speaking while acting needs [communication] speech = "with-action" ' \
-                       '(section 5)'
+                       '(§5)'
             said, _, act = label.partition(" + ")
             if act.startswith(("inform(", "ask(", "announce(")) or act == SILENCE:
                 return f"{act} cannot be said with an inform; only an action or wait can"
@@ -435,20 +435,20 @@ class Replay:
             return []
         if goal:
             if node.moves:
-                self.fail(path, f"{where}: a goal (section 6) must be a leaf, but it has "
+                self.fail(path, f"{where}: a goal (§6) must be a leaf, but it has "
                           f"{len(node.moves)} move(s)")
             else:
                 self.goals_reached.add(node.id)
             self.end(node.id)
             return []
         if not node.moves:
-            self.fail(path, f"{where}: leaf that is not a goal (section 6): "
+            self.fail(path, f"{where}: leaf that is not a goal (§6): "
                       + self.why_not_goal(es))
             self.end(node.id)
             return []
         if es.passive >= 3:
             self.fail(path, f"{where}: dead end: third passive move (wait/pass) in a row and "
-                      "not a goal (section 6)")
+                      "not a goal (§6)")
             self.end(node.id)
             return []
         if es.turn == ROBOT:
@@ -491,11 +491,11 @@ class Replay:
         if list(move.told) != list(st.told):
             self.fail(cpath, f"{where}: told is {list(move.told)}, but the move says "
                       + (f"{list(st.told)}" if st.told else "nothing")
-                      + " (speech, section 5)")
+                      + " (speech, §5)")
             return False
         if not _same(move.cost, st.cost):
             self.fail(cpath, f"{where}: cost is {move.cost}, but the move costs "
-                      f"{_num(st.cost)} under the problem's costs (section 7)")
+                      f"{_num(st.cost)} under the problem's costs (§7)")
             return False
         self.step_cost[node.id, j] = st.cost
         self.weight[node.id, j] = self.problem.objective.weight(move.action, want_call[0])
@@ -533,7 +533,7 @@ class Replay:
         r = self.robot_steps(es, move.action)
         if isinstance(r, str):
             self.fail(cpath, f"node {child.id} (R {move.action}): not a legal robot option "
-                      f"(section 4): {r}")
+                      f"(§4): {r}")
             self.end(node.id)
             return []
         st = self.recorded(child, r)
@@ -607,7 +607,7 @@ class Replay:
             matches = self.human_steps(es, move.action, options)
             if not matches:
                 self.fail(cpath, f"node {child.id} (H {move.action}): extra human branch: "
-                          f"not one of the human's options (section 4) "
+                          f"not one of the human's options (§4) "
                           f"{[o.label for o in options]}")
                 self.end(node.id)
                 continue
@@ -635,7 +635,7 @@ class Replay:
                           "its worlds, which fails in T (acting on a false belief)")
             else:
                 self.fail(path, f"{where}: missing human branch {self.name(HUMAN)} {o.label} "
-                          "(every human option is an AND branch, section 4)")
+                          "(every human option is an AND branch, §4)")
         return out
 
 

@@ -69,7 +69,7 @@ def check_objective(rp: Replay) -> None:
     kind = got.get("kind") if isinstance(got, dict) else None
     if kind != want.kind.value:
         rp.fail([], f"policy objective kind is {kind!r}, but the problem's objective is "
-                  f"{want.kind.value!r} (section 7)")
+                  f"{want.kind.value!r} (§7)")
         return
     weights = got.get("weights")
     if weights is not None:
@@ -78,11 +78,11 @@ def check_objective(rp: Replay) -> None:
                                                  for k in mine):
             theirs = ", ".join(f"{k!r}: {_num(v)}" for k, v in want.weights.items())
             rp.fail([], f"policy objective weights are {dict(weights)}, but the "
-                      f"problem's are {{{theirs}}} (section 7)")
+                      f"problem's are {{{theirs}}} (§7)")
     ties = got.get("ties")
     if ties is not None and list(ties) != list(want.ties):
         rp.fail([], f"policy objective ties are {list(ties)}, but the problem's are "
-                  f"{[str(t) for t in want.ties]} (section 7)")
+                  f"{[str(t) for t in want.ties]} (§7)")
 
 
 def check_summary(rp: Replay, order: list[int] | None) -> None:
@@ -100,7 +100,7 @@ def check_summary(rp: Replay, order: list[int] | None) -> None:
         if v is not None and not _same(nodes[n].value, v):
             rp.fail(path_to.get(n, []), f"node {n} ({reached_by(rp, n)}): value is "
                       f"{nodes[n].value}, but its {what} cost-to-go is {_num(v)} "
-                      "(section 7)")
+                      "(§7)")
     root_value = val.get(0)
     if not _same(pol.cost, nodes[0].value):
         rp.fail([], f"policy cost is {pol.cost}, but the root's value is "
@@ -112,7 +112,7 @@ def check_summary(rp: Replay, order: list[int] | None) -> None:
                             ("expected", pol.expected, mean.get(0))):
         if got is not None and want is not None and not _same(got, want):
             rp.fail([], f"policy {name} is {got}, but the policy's "
-                      f"{name.replace('_', '-')} cost is {_num(want)} (section 7)")
+                      f"{name.replace('_', '-')} cost is {_num(want)} (§7)")
     if order is None:
         return
     # counted in the tree unfolding, by the number of root paths reaching each node

@@ -84,7 +84,7 @@ def validate(problem: Problem, policy: Policy) -> Report:
         rp.walk(root_es)
     if order is None:
         rp.fail([], f"node {found} is its own descendant: the policy has a cycle "
-                "(section 7: policies are acyclic)")
+                "(§7: policies are acyclic)")
     elif len(order) != len(nodes):
         rp.fail([], f"{len(nodes) - len(order)} node(s) are not reachable from the root")
     check_summary(rp, order)
