@@ -56,7 +56,7 @@ if TYPE_CHECKING:
     from .run.executor import Executor
     from .search.planner import Result, solve
 
-__version__ = "0.2.0"
+__version__ = "0.3.0"
 
 
 def validate(problem: Problem, policy: Policy) -> Report:

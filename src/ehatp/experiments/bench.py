@@ -5,7 +5,7 @@ extraction; reading the TOML is not timed); ``search_ms`` is the search alone, a
 reports it. Two columns are *stored* figures, not measured by this command, and the table says
 so: the paper's published times (Table 1's column is in units of 10^5 ms) and the authors'
 prototype with its needless tree copying removed (medians of 5 interleaved rounds measured side
-by side with ehatp on one 2-core machine on 2026-11-22, spec ``paper-domains.md``). No ratio
+by side with ehatp on one 2-core machine on 2026-11-22, as the project's specification records). No ratio
 against a stored figure is printed: a ratio is only meaningful within one run on one machine.
 """
 
@@ -36,7 +36,7 @@ class PaperRow:
     max_worlds: int
     leaves: int
     time_ms: int  # Table 1's "time (ms) x 10^5" value times 10^5
-    prototype_ms: int  # copy-free prototype, stored (2026-11-22, spec paper-domains.md)
+    prototype_ms: int  # copy-free prototype, stored (measured side by side, 2026-11-22)
 
 
 TABLE1: tuple[PaperRow, ...] = (
