@@ -5,8 +5,9 @@ extraction; reading the TOML is not timed); ``search_ms`` is the search alone, a
 reports it. Two columns are *stored* figures, not measured by this command, and the table says
 so: the paper's published times (Table 1's column is in units of 10^5 ms) and the authors'
 prototype with its needless tree copying removed (medians of 5 interleaved rounds measured side
-by side with ehatp on one 2-core machine on 2026-11-22, as the project's specification records). No ratio
-against a stored figure is printed: a ratio is only meaningful within one run on one machine.
+by side with ehatp on one 2-core machine on 2026-11-22, as the project's specification
+records). No ratio against a stored figure is printed: a ratio is only meaningful within one run
+on one machine.
 """
 
 from __future__ import annotations
