@@ -15,8 +15,6 @@ in and out), ``run`` (executing a policy), ``experiments`` and ``cli`` (docs/arc
 import sys
 from typing import TYPE_CHECKING, Any
 
-from .check.validator import Report
-from .check.validator import validate as _validate
 from .errors import (
     DomainError,
     EhatpError,
@@ -52,6 +50,7 @@ from .model.options import (
 from .model.problem import BeliefWorld, Costs, Limits, Problem
 
 if TYPE_CHECKING:
+    from .check.validator import Report
     from .formats.render import Explorer
     from .run.executor import Executor
     from .search.planner import Result, solve
@@ -59,8 +58,11 @@ if TYPE_CHECKING:
 __version__ = "0.3.0"
 
 
-def validate(problem: Problem, policy: Policy) -> Report:
-    """Check ``policy`` against ``problem`` with the independent validator."""
+def validate(problem: Problem, policy: Policy) -> "Report":
+    """Check ``policy`` against ``problem`` with the independent validator (loaded on first
+    use, so that ``import ehatp`` and ``ehatp --help`` stay quick)."""
+    from .check.validator import validate as _validate
+
     return _validate(problem, policy)
 
 
@@ -96,7 +98,8 @@ def _show_policies_in_notebooks() -> None:
 
 _show_policies_in_notebooks()
 
-_LAZY = {"solve": "search.planner", "Result": "search.planner", "Executor": "run.executor"}
+_LAZY = {"solve": "search.planner", "Result": "search.planner", "Executor": "run.executor",
+         "Report": "check.validator"}
 
 
 def __getattr__(name: str) -> object:
