@@ -1,8 +1,8 @@
 """How time and memory grow with the problem: the scaling grid, one fresh process per instance.
 
-    .venv/bin/python benchmarks/scaling.py [--max-size N] [--only PATTERN ...] [--timeout S]
-        [--max-memory SIZE] [--repeat N] [--json FILE] [--plot FILE.png] [--baseline FILE.json]
-        [--src DIR] [--versus DIR]
+    .venv/bin/python benchmarks/scaling.py [--max-size N] [--only PATTERN ...] [--big]
+        [--no-symmetry] [--timeout S] [--max-memory SIZE] [--repeat N] [--json FILE]
+        [--plot FILE.png] [--baseline FILE.json] [--src DIR] [--versus DIR]
 
 Same grid and table as ``ehatp bench scaling`` (``ehatp.experiments.bench``). ``--src DIR`` times
 another checkout's ``src`` directory with this checkout's grid (how docs/benchmarks.md measured
@@ -35,6 +35,10 @@ def main(argv: list[str] | None = None) -> int:
                     help="grid points up to this size (default 5)")
     ap.add_argument("--only", action="append", metavar="PATTERN",
                     help="instances whose name matches (repeatable), any size")
+    ap.add_argument("--big", action="store_true",
+                    help="the large points instead (12-30 cubes, 2-4 boxes, K=2, 4, 8)")
+    ap.add_argument("--no-symmetry", action="store_true",
+                    help="solve without the symmetry reduction")
     ap.add_argument("--timeout", type=float, default=60.0, metavar="S",
                     help="seconds per instance (default 60)")
     ap.add_argument("--max-memory", metavar="SIZE", help="resident memory per instance, e.g. 2G")
@@ -55,7 +59,8 @@ def main(argv: list[str] | None = None) -> int:
         memory = parse_size(args.max_memory) if args.max_memory else 0
     except ValueError as e:
         ap.error(f"--max-memory: {e}")
-    points = bench.select_points(args.max_size, args.only)
+    points = bench.select_points(args.max_size, args.only, args.big)
+    symmetry = False if args.no_symmetry else None
     if not points:
         ap.error("no grid instance selected")
 
@@ -66,7 +71,8 @@ def main(argv: list[str] | None = None) -> int:
 
     if args.versus is None:
         series = {"ehatp": bench.run_scaling(points, timeout=args.timeout, max_memory=memory,
-                                             repeat=args.repeat, src=args.src, notify=notify)}
+                                             repeat=args.repeat, src=args.src, notify=notify,
+                                             symmetry=symmetry)}
     else:  # one point at a time, the two versions alternating run by run
         series = {"versus": [], "this checkout": []}
         for i, p in enumerate(points):
@@ -74,7 +80,8 @@ def main(argv: list[str] | None = None) -> int:
                 notify(p, i, len(points), r)
                 for label, src in (("versus", args.versus), ("this checkout", args.src)):
                     series[label] += bench.run_scaling([p], timeout=args.timeout,
-                                                       max_memory=memory, src=src)
+                                                       max_memory=memory, src=src,
+                                                       symmetry=symmetry)
         series = {k: _medians(v) for k, v in series.items()}
     if sys.stderr.isatty():
         print("\r\033[K", end="", file=sys.stderr, flush=True)
@@ -103,7 +110,7 @@ def _medians(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     out = []
     for runs in by.values():
         row = dict(runs[-1], runs=len(runs))
-        for k in ("time_s", "peak_mb", "states_per_s"):
+        for k in bench.MEDIAN_KEYS:
             xs = [x[k] for x in runs if x.get(k) is not None]
             row[k] = statistics.median(xs) if xs else None
         out.append(row)

@@ -39,9 +39,42 @@ def test_grid_names_are_unique_and_smallest_first() -> None:
 
 def test_selection() -> None:
     assert all(p.size <= 3 for p in bench.select_points(3))
-    assert [p.name for p in bench.select_points(3, ["cubes-c12-*"])] == [
-        "cubes-c12-b2-opaque-k2"]
+    assert [p.name for p in bench.select_points(3, ["cubes-c12-b2-*"])] == [
+        "cubes-c12-b2-opaque-k2", "cubes-c12-b2-opaque-k4", "cubes-c12-b2-opaque-k8"]
     assert bench.select_points(None, ["nothing-like-this"]) == []
+
+
+def test_the_large_points_are_opt_in() -> None:
+    big = bench.select_points(5, big=True)
+    names = [p.name for p in big]
+    assert len(names) == len(set(names)) == 45
+    assert {p.cubes for p in big} == {12, 16, 20, 24, 30}
+    assert {p.boxes for p in big} == {2, 3, 4} and {p.K for p in big} == {2, 4, 8}
+    # the targets are among them
+    assert {"cubes-c20-b2-opaque-k2", "cubes-c30-b2-opaque-k2", "cubes-c20-b3-opaque-k4",
+            "cubes-c16-b3-opaque-k8"} <= set(names)
+    # never in the default grid, nor reached by --max-size; named, they run
+    assert not set(names) & {p.name for p in bench.select_points(None)} - {
+        "cubes-c12-b2-opaque-k2"}
+    assert [p.name for p in bench.select_points(3, ["cubes-c30-b4-opaque-k8"])] == [
+        "cubes-c30-b4-opaque-k8"]
+    assert len({p.name for p in bench.scaling_grid(big=True)}) == len(
+        bench.scaling_grid()) + 44
+
+
+def test_phase_shares_add_up_by_phase() -> None:
+    phases = {"before grounding": 0.01, "grounding": 0.09, "search": 0.5,
+              "search (first worst-case pass)": 0.1, "values (worst case)": 0.05,
+              "values (choices)": 0.05, "extraction": 0.15, "writing": 0.05}
+    shares = bench.phase_shares(phases)
+    assert shares is not None and list(shares) == list(bench.PHASES)
+    assert shares["grounding"] == pytest.approx(0.1) and shares["search"] == pytest.approx(0.6)
+    assert shares["values"] == pytest.approx(0.1) and sum(shares.values()) == pytest.approx(1)
+    assert bench.format_shares(shares) == "10/60/10/15/5"
+    # a phase of a name the benchmark does not know is shown after the five, not lost
+    other = bench.phase_shares({"search": 1.0, "lifting": 1.0})
+    assert other is not None and bench.format_shares(other) == "0/50/0/0/0 +lifting 50"
+    assert bench.phase_shares(None) is None and bench.format_shares(None) == "-"
 
 
 @pytest.mark.parametrize("name", ["cubes-c3-b2-opaque-k6", "cubes-c3-b2-transparent-k8",
@@ -94,8 +127,29 @@ def test_bench_scaling_runs_the_smallest_points(tmp_path: Path) -> None:
         assert x["generated"] >= x["distinct"] > 0 and x["max_worlds"] >= 1
         assert x["peak_mb"] > 0 and x["time_s"] > 0 and x["states_per_s"] > 0
         assert x["policy_nodes"] > 0 and x["policy_bytes"] > 0
+        assert x["cpu_s"] > 0  # the whole process's, start-up included
+        # every count the solver reports, and the time of each phase of the solve
+        assert x["stats"]["distinct"] == x["distinct"] and x["stats"]["atoms"] > 0
+        assert {"grounding", "search", "extraction", "writing"} <= set(x["phases_s"])
+        assert list(x["phase_shares"]) == list(bench.PHASES)
+        assert sum(x["phase_shares"].values()) == pytest.approx(1)
+        assert x["last_phase"] == "extraction"
     for name in SMALL:
         assert name in r.stdout
+    assert "CPU s" in r.stdout and "phases % g/s/v/e/w" in r.stdout
+
+
+def test_bench_scaling_without_symmetry_counts_every_renaming() -> None:
+    name = "cubes-c3-b2-opaque-k2"
+    counts = {}
+    for flag in ([], ["--no-symmetry"]):
+        r = runner.invoke(app, ["bench", "scaling", "--only", name, *flag, "--json", "-"])
+        assert r.exit_code == 0, r.output
+        (row,) = json.loads(r.stdout)
+        assert row["status"] == "solved" and row["symmetry"] == (False if flag else None)
+        counts[bool(flag)] = (row["distinct"], row["cost"])
+    (distinct, cost), (distinct_all, cost_all) = counts[False], counts[True]
+    assert distinct_all > distinct and cost_all == cost
 
 
 def test_bench_scaling_stops_an_instance_at_its_timeout(tmp_path: Path) -> None:
@@ -105,6 +159,7 @@ def test_bench_scaling_stops_an_instance_at_its_timeout(tmp_path: Path) -> None:
     assert r.exit_code == 0, r.output
     (row,) = json.loads(r.stdout)
     assert row["status"] == "timeout" and "time limit" in row["error"]
+    assert row["last_phase"] is not None  # the phase the limit stopped
 
 
 def test_bench_scaling_unknown_instance_is_one_line() -> None:

@@ -100,6 +100,12 @@ def bench_scaling(
         "--only", metavar="PATTERN",
         help="Run just the instances matching this name pattern, any size (repeatable), e.g. "
              "--only 'cubes-c9-*' --only cooking-k8.", show_default=False)] = None,
+    big: Annotated[bool, typer.Option(
+        "--big", help="Run the large points instead: 12-30 cubes, 2-4 opaque boxes, K=2, 4, 8 "
+                      "(45 points, up to --timeout each).")] = False,
+    no_symmetry: Annotated[bool, typer.Option(
+        "--no-symmetry", help="Solve without the symmetry reduction (every renaming of "
+                              "interchangeable objects its own state).")] = False,
     timeout: Annotated[float, typer.Option(
         "--timeout", min=0.1, help="Seconds each instance may take (it is stopped then, and "
                                    "reported as such).")] = 60.0,
@@ -119,11 +125,14 @@ def bench_scaling(
     """Solve a grid of generated problems, each in a fresh process, and show how time and
     memory grow: cubes 3-10 split over both tables, 2-3 boxes, transparent or opaque, trips of
     K=2-8; cooking with trips of K=2-8; and two larger cube instances (12 cubes; 10 cubes with
-    human_reach "any"), run when --only names them or --max-size allows.
+    human_reach "any"), run when --only names them or --max-size allows; --big runs the large
+    points (12-30 cubes, 2-4 boxes, K=2-8) instead.
 
-    Per instance: time (solve and the policy as JSON), states generated and distinct,
-    states/s, |W|, peak resident memory, and the policy's size (nodes, bytes). Exit 1 if an
-    instance crashed (a stop at --timeout or --max-memory is a result, not a failure).
+    Per instance: time (solve and the policy as JSON), the whole process's CPU time, states
+    generated and distinct (canonical, with symmetry), states/s, |W|, peak resident memory,
+    the policy's size (nodes, bytes) and the share of time in each phase (grounding, search,
+    values, extraction, writing). Exit 1 if an instance crashed (a stop at --timeout or
+    --max-memory is a result, not a failure).
     """
     from ..experiments import bench as bench_mod
 
@@ -133,7 +142,7 @@ def bench_scaling(
             memory = parse_size(max_memory)
         except ValueError as e:
             die(f"--max-memory {max_memory}: {e}; write e.g. 2G, 512M or a number of bytes")
-    points = bench_mod.select_points(max_size, only)
+    points = bench_mod.select_points(max_size, only, big)
     if not points:
         what = f"--only {' '.join(only)}" if only else f"--max-size {max_size}"
         die(f"{what}: no grid instance selected; names look like cubes-c6-b3-opaque-k8, "
@@ -149,7 +158,8 @@ def bench_scaling(
         status.start()
     try:
         rows = bench_mod.run_scaling(points, timeout=timeout, max_memory=memory,
-                                     repeat=repeat, notify=notify)
+                                     repeat=repeat, notify=notify,
+                                     symmetry=False if no_symmetry else None)
     finally:
         if status is not None:
             status.stop()

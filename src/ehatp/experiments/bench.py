@@ -291,29 +291,70 @@ def _toml_list(xs: Sequence[str]) -> str:
     return "[" + ", ".join(f'"{x}"' for x in xs) + "]"
 
 
-def scaling_grid() -> list[GridPoint]:
+BIG_CUBES, BIG_BOXES, BIG_KS = (12, 16, 20, 24, 30), (2, 3, 4), (2, 4, 8)
+"""The large points (issue 17): opaque boxes, cubes split over both tables as in the grid."""
+
+
+def big_points() -> list[GridPoint]:
+    """The large points, smallest first: 12-30 cubes, 2-4 opaque boxes, K = 2, 4, 8 (45
+    points, up to a minute each). Run with ``--big`` or named with ``--only``, never by
+    ``--max-size``; ``cubes-c12-b2-opaque-k2`` is also in the grid."""
+    pts = [GridPoint("cubes", k, n, b) for n in BIG_CUBES for b in BIG_BOXES for k in BIG_KS]
+    return sorted(pts, key=_grid_order)
+
+
+def _grid_order(p: GridPoint) -> tuple[int, str, str, int, int, bool]:
+    return (p.size, p.family, p.reach, p.boxes, p.K, not p.transparent)
+
+
+def scaling_grid(big: bool = False) -> list[GridPoint]:
     """The grid, smallest first: cubes 3-10 split over both tables, 2-3 boxes, transparent
-    and opaque, trips of K=2-8; cooking with trips of K=2-8; then three larger instances,
-    run only when named with ``--only`` or allowed by ``--max-size``."""
+    and opaque, trips of K=2-8; cooking with trips of K=2-8; then two larger instances,
+    run only when named with ``--only`` or allowed by ``--max-size``; with ``big``, also
+    :func:`big_points`."""
     pts = [GridPoint("cubes", k, n, b, tr) for n in range(3, 11) for b in (2, 3)
            for tr in (True, False) for k in sorted(CUBE_TRIPS)]
     pts += [GridPoint("cooking", k) for k in sorted(COOKING_TRIPS)]
     pts += [GridPoint("cubes", 2, 12, 2), GridPoint("cubes", 2, 10, 2, reach="any")]
-    return sorted(pts, key=lambda p: (p.size, p.family, p.reach, p.boxes, p.K,
-                                      not p.transparent))
+    if big:
+        pts += [p for p in big_points() if p not in pts]
+    return sorted(pts, key=_grid_order)
 
 
 # The child: load, solve (timed), serialise the policy (timed), report one JSON line. Public
-# API only, and ``max_memory`` only when this checkout's solve() takes it.
+# API only, except that the budget of time and memory is a Budget whose phase changes are
+# timed (grounding, search, values, extraction; docs/semantics.md §7): when this checkout has
+# no such Budget, the phases are not reported. ``max_memory`` and ``symmetry`` are passed only
+# when this checkout's solve() takes them.
 _CHILD = r"""
 import inspect, json, resource, sys, time
 t_start = time.perf_counter()
 import ehatp
-path, timeout, max_memory = sys.argv[1], float(sys.argv[2]), int(sys.argv[3])
+path, timeout, max_memory, symmetry = sys.argv[1], float(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
 problem = ehatp.load(path)
+params = inspect.signature(ehatp.solve).parameters
 kw = {"timeout": timeout}
-if max_memory and "max_memory" in inspect.signature(ehatp.solve).parameters:
+if max_memory and "max_memory" in params:
     kw["max_memory"] = max_memory
+if symmetry != "default" and "symmetry" in params:
+    kw["symmetry"] = symmetry == "on"
+marks = []  # (phase, time it started)
+try:
+    from ehatp.search.limits import Budget
+    class TimedBudget(Budget):
+        @property
+        def phase(self):
+            return Budget.phase.fget(self)
+        @phase.setter
+        def phase(self, name):
+            marks.append((name, time.perf_counter()))
+            Budget.phase.fset(self, name)
+    if "budget" in params and isinstance(getattr(Budget, "phase", None), property):
+        mem = max_memory or getattr(problem.limits, "max_memory", None) or None
+        kw = {k: v for k, v in kw.items() if k not in ("timeout", "max_memory")}
+        kw["budget"] = TimedBudget(timeout, mem)
+except (ImportError, TypeError, AttributeError):
+    marks = None
 def peak_mb():
     # VmHWM: this process image's peak (ru_maxrss would also count the parent's size at fork)
     try:
@@ -326,15 +367,31 @@ def peak_mb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 t0 = time.perf_counter()
 result = ehatp.solve(problem, **kw)
+t_solved = time.perf_counter()
 text = result.policy.to_json() if result.policy is not None else None
 t1 = time.perf_counter()
+phases = None
+if marks is not None and "budget" in kw:
+    phases = {}
+    ends = [t for _, t in marks[1:]] + [t_solved]
+    for (name, start), end in zip(marks, ends):
+        if name != "done":
+            phases[name] = phases.get(name, 0.0) + end - start
+    if marks and marks[0][1] > t0:
+        phases["before grounding"] = marks[0][1] - t0
+    phases["writing"] = t1 - t_solved
+usage = resource.getrusage(resource.RUSAGE_SELF)
 st = result.stats
 pol = result.policy
 print(json.dumps({
     "status": result.status, "optimal": result.optimal, "time_s": t1 - t0,
-    "process_s": t1 - t_start, "search_ms": st.get("time_ms"),
+    "process_s": t1 - t_start, "cpu_s": usage.ru_utime + usage.ru_stime,
+    "search_ms": st.get("time_ms"),
     "generated": st.get("generated"), "distinct": st.get("distinct"),
     "max_worlds": st.get("max_worlds"),
+    "stats": {k: v for k, v in st.items() if isinstance(v, (int, float))},
+    "phases_s": phases,
+    "last_phase": None if not marks else [m for m, _ in marks if m != "done"][-1],
     "peak_mb": peak_mb(),
     "policy_nodes": None if pol is None else len(pol.nodes),
     "policy_bytes": None if text is None else len(text.encode()),
@@ -342,12 +399,56 @@ print(json.dumps({
     "reason": result.reason}))
 """
 
+PHASES = ("grounding", "search", "values", "extraction", "writing")
+"""The phases a scaling row's shares add up over (``phase_shares``)."""
+
+
+def phase_group(name: str) -> str:
+    """The phase of :data:`PHASES` a budget's phase name belongs to: "search (first
+    worst-case pass)" is the search's, "values (choices)" the values', the time between
+    ``solve()`` being called and grounding starting is grounding's; anything else (a phase
+    added later) is its own."""
+    for group, prefixes in (("grounding", ("ground", "before grounding")),
+                            ("search", ("search",)), ("values", ("values",)),
+                            ("extraction", ("extract", "realis")), ("writing", ("writ",))):
+        if name.startswith(prefixes):
+            return group
+    return name
+
+
+def phase_shares(phases_s: dict[str, float] | None) -> dict[str, float] | None:
+    """Each phase's share of the timed work (``solve()`` and writing the policy), from a row's
+    ``phases_s`` (seconds by the budget's phase names), grouped by :func:`phase_group`; the
+    shares add up to 1. None when the phases were not timed."""
+    if not phases_s:
+        return None
+    grouped: dict[str, float] = {}
+    for name, secs in phases_s.items():
+        g = phase_group(name)
+        grouped[g] = grouped.get(g, 0.0) + max(0.0, secs)
+    total = sum(grouped.values())
+    if total <= 0:
+        return None
+    return {g: grouped[g] / total for g in sorted(grouped, key=_phase_order)}
+
+
+def _phase_order(g: str) -> tuple[int, str]:
+    return (PHASES.index(g) if g in PHASES else len(PHASES), g)
+
 
 def run_point(point: GridPoint, *, timeout: float, max_memory: int = 0,
-              src: str | None = None, workdir: str | None = None) -> dict[str, Any]:
+              src: str | None = None, workdir: str | None = None,
+              symmetry: bool | None = None) -> dict[str, Any]:
     """Solve ``point`` in a fresh Python process (``src``: the ``src`` directory of another
-    checkout to time instead of this one). The child stops itself at ``timeout`` seconds; it is
-    killed if it has not finished 5 % (+ 10 s of start-up) later."""
+    checkout to time instead of this one; ``symmetry``: force the reduction of
+    docs/semantics.md §3 on or off, default the problem's). The child stops itself at
+    ``timeout`` seconds; it is killed if it has not finished 5 % (+ 10 s of start-up) later.
+
+    The row: the point's parameters, the child's figures (``time_s``: ``solve()`` and the
+    policy's JSON; ``cpu_s``: the whole process's CPU time, start-up and loading included;
+    ``peak_mb``: its largest resident size; ``phases_s``: seconds per budget phase,
+    ``phase_shares``: their shares by :data:`PHASES`; ``stats``: every count the solver
+    reports), and ``states_per_s``."""
     import json
     import os
     import subprocess
@@ -356,7 +457,8 @@ def run_point(point: GridPoint, *, timeout: float, max_memory: int = 0,
 
     row: dict[str, Any] = {"instance": point.name, "size": point.size, "K": point.K,
                            "cubes": point.cubes, "boxes": point.boxes,
-                           "transparent": point.transparent, "reach": point.reach}
+                           "transparent": point.transparent, "reach": point.reach,
+                           "symmetry": symmetry}
     env = dict(os.environ)
     if src is not None:
         env["PYTHONPATH"] = src + os.pathsep + env.get("PYTHONPATH", "")
@@ -364,7 +466,8 @@ def run_point(point: GridPoint, *, timeout: float, max_memory: int = 0,
         path = os.path.join(tmp, f"{point.name}.toml")
         with open(path, "w", encoding="utf-8") as f:
             f.write(point.toml())
-        cmd = [sys.executable, "-c", _CHILD, path, str(timeout), str(max_memory)]
+        sym = "default" if symmetry is None else ("on" if symmetry else "off")
+        cmd = [sys.executable, "-c", _CHILD, path, str(timeout), str(max_memory), sym]
         try:
             proc = subprocess.run(cmd, capture_output=True, text=True, env=env,
                                   timeout=timeout * 1.05 + 10)
@@ -380,30 +483,40 @@ def run_point(point: GridPoint, *, timeout: float, max_memory: int = 0,
     row.update(data)
     t = data["time_s"]
     row["states_per_s"] = round(data["generated"] / t) if t and data["generated"] else None
+    row["phase_shares"] = phase_shares(data.get("phases_s"))
     row["error"] = None if data["status"] == "solved" else data["reason"]
     return row
 
 
-def select_points(max_size: int | None = None, only: Sequence[str] | None = None
-                  ) -> list[GridPoint]:
+def select_points(max_size: int | None = None, only: Sequence[str] | None = None,
+                  big: bool = False) -> list[GridPoint]:
     """The grid points named by ``only`` (shell patterns on instance names, e.g.
-    ``cubes-c9-*``; any size) or else all up to ``max_size``, smallest first."""
+    ``cubes-c9-*``; any size, the large points included), else with ``big`` the large points
+    (:func:`big_points`), else the grid up to ``max_size``; smallest first."""
     import fnmatch
 
-    pts = scaling_grid()
     if only:
-        return [p for p in pts if any(fnmatch.fnmatchcase(p.name, o) for o in only)]
-    return [p for p in pts if max_size is None or p.size <= max_size]
+        return [p for p in scaling_grid(big=True)
+                if any(fnmatch.fnmatchcase(p.name, o) for o in only)]
+    if big:
+        return big_points()
+    return [p for p in scaling_grid() if max_size is None or p.size <= max_size]
 
 
 ScalingNotify = Callable[[GridPoint, int, int, int], None]  # (point, index, count, run)
 
 
+MEDIAN_KEYS = ("time_s", "cpu_s", "peak_mb", "states_per_s")
+"""The figures a row of several runs gives as medians (the counts are the same every run)."""
+
+
 def run_scaling(points: Sequence[GridPoint], *, timeout: float, max_memory: int = 0,
                 repeat: int = 1, src: str | None = None,
-                notify: ScalingNotify | None = None) -> list[dict[str, Any]]:
+                notify: ScalingNotify | None = None,
+                symmetry: bool | None = None) -> list[dict[str, Any]]:
     """Run every point ``repeat`` times, each in its own process; one row per point with the
-    medians of time, states/s and peak memory (the counts are the same every run)."""
+    medians of :data:`MEDIAN_KEYS` (the counts are the same every run; the phases are the last
+    run's)."""
     import statistics
 
     rows = []
@@ -412,20 +525,25 @@ def run_scaling(points: Sequence[GridPoint], *, timeout: float, max_memory: int 
         for r in range(max(1, repeat)):
             if notify is not None:
                 notify(p, i, len(points), r)
-            runs.append(run_point(p, timeout=timeout, max_memory=max_memory, src=src))
+            runs.append(run_point(p, timeout=timeout, max_memory=max_memory, src=src,
+                                  symmetry=symmetry))
             if runs[-1]["status"] not in ("solved", "unsolvable"):
                 break  # a limit or a crash: repeating it tells nothing more
         row = dict(runs[-1])
         row["runs"] = len(runs)
-        for k in ("time_s", "peak_mb", "states_per_s"):
+        for k in MEDIAN_KEYS:
             xs = [x[k] for x in runs if x.get(k) is not None]
             row[k] = statistics.median(xs) if xs else None
         rows.append(row)
     return rows
 
 
-SCALING_COLUMNS = ("instance", "status", "time s", "generated", "distinct", "states/s", "|W|",
-                   "peak MB", "policy nodes", "policy KB")
+SCALING_COLUMNS = ("instance", "status", "time s", "CPU s", "generated", "distinct", "states/s",
+                   "|W|", "peak MB", "policy nodes", "policy KB", "phases % " + "/".join(
+                       g[0] for g in PHASES))
+"""The table's columns: ``distinct`` counts canonical states when the symmetry reduction is on
+(docs/semantics.md §3); ``policy nodes`` is the written policy's; ``phases %`` is the share of
+the timed work in grounding / search / values / extraction / writing."""
 
 
 def scaling_cells(r: dict[str, Any]) -> list[str]:
@@ -434,9 +552,20 @@ def scaling_cells(r: dict[str, Any]) -> list[str]:
 
     kb = None if r.get("policy_bytes") is None else r["policy_bytes"] / 1024
     status = r["status"] if r.get("optimal", True) or r["status"] != "solved" else "solved*"
-    return [r["instance"], status, n(r.get("time_s"), ".2f"), n(r.get("generated")),
-            n(r.get("distinct")), n(_round(r.get("states_per_s"))), n(r.get("max_worlds")),
-            n(r.get("peak_mb"), ".0f"), n(r.get("policy_nodes")), n(kb, ",.0f")]
+    return [r["instance"], status, n(r.get("time_s"), ".2f"), n(r.get("cpu_s"), ".2f"),
+            n(r.get("generated")), n(r.get("distinct")), n(_round(r.get("states_per_s"))),
+            n(r.get("max_worlds")), n(r.get("peak_mb"), ".0f"), n(r.get("policy_nodes")),
+            n(kb, ",.0f"), format_shares(r.get("phase_shares"))]
+
+
+def format_shares(shares: dict[str, float] | None) -> str:
+    """``2/61/5/30/2``: percentages of grounding / search / values / extraction / writing (a
+    phase of another name is added as ``+name 3``); ``-`` when not timed."""
+    if not shares:
+        return "-"
+    text = "/".join(f"{100 * shares.get(g, 0.0):.0f}" for g in PHASES)
+    extra = [f"+{g} {100 * v:.0f}" for g, v in shares.items() if g not in PHASES]
+    return " ".join([text, *extra])
 
 
 def _round(x: float | None) -> int | None:
@@ -444,8 +573,10 @@ def _round(x: float | None) -> int | None:
 
 
 SCALING_TITLE = ("Scaling: generated problems, one fresh process each (time = median wall time "
-                 "of solve() and serialising the policy as JSON; peak MB = the process's maximum "
-                 "resident size)")
+                 "of solve() and serialising the policy as JSON;\nCPU = the whole process's CPU "
+                 "time; peak MB = its maximum resident size; distinct = canonical states with "
+                 "symmetry;\nphases = % of the timed work in grounding/search/values/"
+                 "extraction/writing)")
 
 
 def format_scaling(rows: Sequence[dict[str, Any]]) -> str:
@@ -459,12 +590,19 @@ def format_scaling(rows: Sequence[dict[str, Any]]) -> str:
 
     out = [SCALING_TITLE, "", line(grid[0]), "  ".join("-" * w for w in widths)]
     out += [line(c) for c in grid[1:]]
-    notes = [f"  {r['instance']}: {r['error']}" for r in rows if r.get("error")]
+    notes = [f"  {r['instance']}: {r['error']}" + _cut(r) for r in rows if r.get("error")]
     if any(r["status"] == "solved" and not r.get("optimal", True) for r in rows):
         out += ["", "solved* = solved, not proven optimal"]
     if notes:
         out += ["", "stopped or failed:", *notes]
     return "\n".join(out) + "\n"
+
+
+def _cut(r: dict[str, Any]) -> str:
+    last = r.get("last_phase")
+    if not last or r["status"] == "solved" or last in (r.get("error") or ""):
+        return ""
+    return f" (stopped in {phase_group(last)})"
 
 
 def plot_scaling(series: dict[str, Sequence[dict[str, Any]]], path: str) -> bool:
@@ -501,8 +639,9 @@ def plot_scaling(series: dict[str, Sequence[dict[str, Any]]], path: str) -> bool
     return True
 
 
-__all__ = ["COOKING_TRIPS", "CUBE_TRIPS", "REQUIRED_KEYS", "SCALING_COLUMNS", "TABLE1",
-           "GridPoint", "PaperRow", "format_scaling", "format_table", "headline",
-           "instance_key", "plot_scaling", "rich_table", "run_instance", "run_point",
-           "run_scaling", "run_table1", "scaling_cells", "scaling_grid", "select_points",
-           "totals"]
+__all__ = ["BIG_BOXES", "BIG_CUBES", "BIG_KS", "COOKING_TRIPS", "CUBE_TRIPS", "MEDIAN_KEYS",
+           "PHASES", "REQUIRED_KEYS", "SCALING_COLUMNS", "TABLE1", "GridPoint", "PaperRow",
+           "big_points", "format_scaling", "format_shares", "format_table", "headline",
+           "instance_key", "phase_group", "phase_shares", "plot_scaling", "rich_table",
+           "run_instance", "run_point", "run_scaling", "run_table1", "scaling_cells",
+           "scaling_grid", "select_points", "totals"]
