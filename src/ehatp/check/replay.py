@@ -21,6 +21,7 @@ from ..model.options import Intentions, Speech
 from ..model.problem import Problem
 from ..model.vocabulary import HUMAN, ROBOT, Agent
 from .communication import INTENTION, Semantics
+from .lifted import LiftedCheck, shown
 from .rules import ACTION, ASK, INFORM, PASS, SILENCE, EState, Step, _num, _same
 
 
@@ -69,6 +70,7 @@ class _Item:
     es: EState
     path: list[str]
     move: PolicyMove | None
+    via: str = ""  # a lifted policy's edge: the renaming that took the state to the node
 
 
 class Replay:
@@ -94,6 +96,7 @@ class Replay:
         # and the children a node's branches go on into
         self.ends: dict[int, int] = {}
         self.goes_on: dict[int, list[int]] = {}
+        self.lifted: LiftedCheck | None = None  # a lifted policy's renamings (version 3)
 
     def fail(self, path: Sequence[str], rule: str) -> None:
         self.violations.append(f"branch [{', '.join(path)}]: {rule}")
@@ -336,6 +339,12 @@ class Replay:
             states = nxt
             done.append(mv)
         root = pol.root
+        if self.lifted is not None:  # §3: the root node is the real one renamed
+            ren = self.lifted.renaming(self.lifted.lifted.root)
+            if isinstance(ren, str):
+                self.fail([], f"node 0 (start): symmetry.root: {ren}")
+                return None
+            states = [ren.estate(es) for es in states]
         for es in states:  # an ambiguous opening is settled by the root's recorded agendas
             if not self.facts(root, es, sem.is_goal(es)):
                 return es
@@ -378,25 +387,54 @@ class Replay:
             it = stack.pop()
             node = it.node
             self.nodes_checked += 1
-            kids_ok = self.visit(node, it.es, it.path, it.move)
+            kids_ok = self.visit(node, it.es, it.path, it.move, it.via)
             goes_on = self.goes_on.setdefault(node.id, [])
             for j, st in reversed(kids_ok):
                 assert st.after is not None
                 move = node.moves[j]
                 child = nodes[move.to]
                 path = [*it.path, self.move_label(st.agent, move.action)]
+                arrived = self.arrive(node.id, j, st.after)
+                if isinstance(arrived, str):
+                    self.fail(path, f"node {child.id} ({move.agent} {move.action}): {arrived}")
+                    self.end(node.id)
+                    continue
+                after, via = arrived
+                bad = [] if self.lifted is None else self.facts(child, after,
+                                                               self.sem.is_goal(after))
+                if bad:  # §3: each edge's renaming maps the successor onto the child node
+                    self.fail(path, f"node {child.id} ({move.agent} {move.action}{via}): "
+                              "recorded facts differ from the semantics (the edge's renaming "
+                              "does not map the successor onto the node, §3): "
+                              + "; ".join(bad))
+                    self.end(node.id)
+                    continue
                 seen = self.first.get(child.id)
                 if seen is None:
-                    self.first[child.id], self.path_of[child.id] = st.after, path
-                    stack.append(_Item(child, st.after, path, move))
-                elif seen != st.after:
-                    self.fail(path, f"node {child.id} is shared, but this path reaches it in "
-                              "another state than its first one (by "
-                              f"[{', '.join(self.path_of[child.id])}]): "
-                              + _differences(seen, st.after, self.sem))
+                    self.first[child.id], self.path_of[child.id] = after, path
+                    stack.append(_Item(child, after, path, move, via))
+                elif seen != after:
+                    lifted = "" if self.lifted is None else " (its edge's renaming does " \
+                        "not map the successor onto the node, §3)"
+                    self.fail(path, f"node {child.id} ({move.agent} {move.action}{via}) is "
+                              "shared, but this path reaches it in another state than its "
+                              f"first one (by [{', '.join(self.path_of[child.id])}]){lifted}: "
+                              + _differences(seen, after, self.sem))
                     self.end(node.id)
                     continue
                 goes_on.append(child.id)
+
+    def arrive(self, node: int, j: int, es: EState) -> tuple[EState, str] | str:
+        """The state move ``j`` of ``node`` reaches the child node in: ``es``, or for a
+        lifted policy ``es`` renamed by the move's renaming (§3), with how messages name the
+        renaming; why not, when the renaming is not a checked automorphism."""
+        if self.lifted is None:
+            return es, ""
+        rid = self.lifted.lifted.renaming_of(node, j)
+        ren = self.lifted.renaming(rid)
+        if isinstance(ren, str):
+            return ren
+        return ren.estate(es), shown(rid, ren)
 
     def end(self, node: int) -> None:
         """One branch's check ends at ``node`` (a leaf, or at a violation)."""
@@ -414,13 +452,16 @@ class Replay:
         return count.get(0, 0)
 
     def visit(self, node: PolicyNode, es: EState, path: list[str],
-              move: PolicyMove | None) -> list[tuple[int, Step]]:
-        """Check one node reached by ``move``; return the moves to follow (by index) with the
-        steps the semantics gives for them."""
+              move: PolicyMove | None, via: str = "") -> list[tuple[int, Step]]:
+        """Check one node reached by ``move`` (``via``: the renaming of a lifted policy's edge
+        into it, as messages name it); return the moves to follow (by index) with the steps
+        the semantics gives for them."""
         sem = self.sem
         nodes = self.policy.nodes
-        where = (f"node {node.id} (start)" if move is None
-                 else f"node {node.id} ({move.agent} {move.action})")
+        if move is None and self.lifted is not None:
+            via = shown(self.lifted.lifted.root, self.lifted.renaming(self.lifted.lifted.root))
+        where = (f"node {node.id} (start{via})" if move is None
+                 else f"node {node.id} ({move.agent} {move.action}{via})")
         goal = sem.is_goal(es)
         self.turn[node.id] = es.turn
         bad = self.facts(node, es, goal)
@@ -536,7 +577,21 @@ class Replay:
                       f"(§4): {r}")
             self.end(node.id)
             return []
-        st = self.recorded(child, r)
+        if self.lifted is not None:  # the edge's renaming, checked when the walk follows it
+            arrived = self.arrive(node.id, 0, es)
+            if isinstance(arrived, str):
+                self.fail(cpath, f"node {child.id} (R {move.action}): {arrived}")
+                self.end(node.id)
+                return []
+            ren = self.lifted.renaming(self.lifted.lifted.renaming_of(node.id, 0))
+            assert not isinstance(ren, str)
+            # matched on the child's canonical names; the walk renames the step it follows
+            renamed = [replace(s, after=ren.estate(s.after)) if s.after is not None else s
+                       for s in r]
+            got = self.recorded(child, renamed)
+            st = None if got is None else r[renamed.index(got)]
+        else:
+            st = self.recorded(child, r)
         if st is None:
             # §4: one label, several moves (robot methods starting with the same action):
             # the recorded edge must lead to the node of one of them

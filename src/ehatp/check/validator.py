@@ -41,6 +41,7 @@ from ..formats.policy import Policy
 from ..model.problem import Problem
 from ..model.vocabulary import HUMAN, ROBOT
 from .communication import Semantics
+from .lifted import Lifted, LiftedCheck, lifted_of
 from .network import Agenda, Block
 from .replay import Replay
 from .rules import EState, Step
@@ -66,15 +67,26 @@ class Report:
         return self.message
 
 
-def validate(problem: Problem, policy: Policy) -> Report:
+def validate(problem: Problem, policy: Policy, lifted: Lifted | None = None) -> Report:
     """Check ``policy`` against ``problem``: every rule of docs/semantics.md, §1-§7 (see the
     module docstring). The steps: the policy's header (:func:`_header`), its recorded costs
     and objective, the opening moves and the walk from the root (:class:`~.replay.Replay`),
-    the graph's shape, then the values and counts (:func:`~.summary.check_summary`)."""
+    the graph's shape, then the values and counts (:func:`~.summary.check_summary`).
+
+    A lifted policy (format version 3: its ``symmetry`` table, or ``lifted`` given apart) is
+    checked on its canonical nodes, never expanded (:mod:`.lifted`): each renaming it uses is
+    an automorphism of the problem, the root is the initial node renamed by
+    ``renamings[root]``, and each edge's renaming maps the successor onto its child."""
     rp = Replay(problem, policy)
     nodes = policy.nodes
     if not nodes or not _header(rp):
         return _report(rp, None)
+    lifted = lifted if lifted is not None else lifted_of(policy)
+    if lifted is not None:
+        rp.lifted = LiftedCheck(problem, rp.sem, lifted)
+        if rp.lifted.table_error is not None:
+            rp.fail([], rp.lifted.table_error)
+            return _report(rp, None)
     check_costs(rp)
     check_objective(rp)
     root_es = rp.replay_after()
@@ -88,7 +100,19 @@ def validate(problem: Problem, policy: Policy) -> Report:
     elif len(order) != len(nodes):
         rp.fail([], f"{len(nodes) - len(order)} node(s) are not reachable from the root")
     check_summary(rp, order)
+    if rp.lifted is not None:
+        _unused_renamings(rp, rp.lifted)
     return _report(rp, order)
+
+
+def _unused_renamings(rp: Replay, check: LiftedCheck) -> None:
+    """§3: the renamings of the table no edge used are automorphisms too."""
+    used = check.checked()
+    for rid in range(len(check.lifted.renamings)):
+        if rid not in used:
+            ren = check.renaming(rid)
+            if isinstance(ren, str):
+                rp.fail([], f"symmetry.renamings[{rid}]: {ren}")
 
 
 def _header(rp: Replay) -> bool:
