@@ -15,7 +15,7 @@ from typing import Any
 import pytest
 
 import ehatp
-from ehatp import Domain, HumanModel, Objective, Policy, Problem, Var
+from ehatp import HIDDEN, Domain, HumanModel, Objective, Policy, Problem, Var
 from ehatp.check.communication import Semantics
 from ehatp.check.lifted import Lifted, LiftedCheck, split_v3
 from ehatp.check.validator import Report, validate
@@ -39,6 +39,8 @@ def twins(*, init: tuple[str, ...] = (), preferred: bool = False,
     d.type("place")
     i = Var("i", item)
     taken = d.predicate("taken", i)
+    d.predicate("lamp", i)  # observable: seen by the human at every move
+    d.predicate("note", i, observability=HIDDEN)
     h = d.human
     take = h.action("take", i, pre=~taken(i), effects=[taken(i)])
     one = h.task("take_one")
@@ -268,3 +270,16 @@ def test_every_lifted_example_validates(example: Example) -> None:
 def test_some_shipped_example_is_lifted() -> None:
     lifted = [e.name for e in EXAMPLES if getattr(solved(e).policy, "symmetry", None) is not None]
     assert lifted
+
+
+def test_an_observation_whose_order_a_renaming_changes() -> None:
+    # both lamps are on; the human believes one of two worlds, each with one lamp off and a
+    # note beside the other: situation assessment at the start observes lamp(a) then lamp(b)
+    # (index order) and keeps note(a); the swap is an automorphism, yet in the other order the
+    # human would keep note(b): the root does not stand for its renamings (§3)
+    worlds = [(["note(a)"], ["lamp(b)"]), (["note(b)"], ["lamp(a)"])]
+    p = twins(init=("lamp(a)", "lamp(b)"), beliefs=worlds)
+    assert reason(p, [1, 0]) == ""
+    r = caught(p, lifted_twins(), "node 0 (start): a move here observes atoms in an order a "
+               "renaming changes", "(§3)")
+    assert len(r.violations) == 1

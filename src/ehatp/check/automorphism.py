@@ -25,7 +25,7 @@ from ..model.problem import Problem
 from .network import Agenda, Block
 from .rules import EState
 
-_TOKEN = re.compile(r"[^\s(),=\[\]]+")
+TOKEN = re.compile(r"[^\s(),=\[\]]+")
 
 
 def named_objects(problem: Problem) -> dict[str, str]:
@@ -49,20 +49,20 @@ def named_objects(problem: Problem) -> dict[str, str]:
     for _, (_, args) in problem.goal:
         put(args, "[goal]")
     for label in problem.after:
-        put(_TOKEN.findall(label.partition(" ")[2]), "after")
+        put(TOKEN.findall(label.partition(" ")[2]), "after")
     for key in problem.costs.actions:
         if "(" in key:
-            put(_TOKEN.findall(key), "a cost given by ground label")
+            put(TOKEN.findall(key), "a cost given by ground label")
     for key in problem.objective.weights:
         if "(" in key:
-            put(_TOKEN.findall(key), "an objective weight given by ground label")
+            put(TOKEN.findall(key), "an objective weight given by ground label")
     return out
 
 
 def rename_name(name: str, ren: dict[str, str]) -> str:
     """A ground atom or task name with its objects renamed: ``on(c1, box1)``, ``loc(c1) =
     box1``, ``balls(b1)[2]``, ``take(c1)`` (every argument, and a variable's value)."""
-    return _TOKEN.sub(lambda m: ren.get(m.group(0), m.group(0)), name)
+    return TOKEN.sub(lambda m: ren.get(m.group(0), m.group(0)), name)
 
 
 class Renaming:
@@ -262,4 +262,4 @@ def ordered_methods(g: Grounded) -> bool:
                for m in ms)
 
 
-__all__ = ["Renaming", "lazy", "named_objects", "ordered_methods", "rename_name"]
+__all__ = ["TOKEN", "Renaming", "lazy", "named_objects", "ordered_methods", "rename_name"]

@@ -72,6 +72,16 @@ class Semantics(Rules):
         return tuple(self.say(t, u) for u in units)
 
 
+    def heard(self, worlds: Worlds, t: int, units: Sequence[int]) -> Worlds:
+        """§5: what the human believes after an inform of ``units`` it hears (:meth:`tell`,
+        shown to :attr:`watch`)."""
+        if self.watch is not None:
+            mask = 0
+            for u in units:
+                mask |= u
+            self.watch(worlds, t, mask)
+        return self.tell(worlds, t, units)
+
     def tell(self, worlds: Worlds, t: int, units: Iterable[int]) -> Worlds:
         """§5: the human learns T's value of every unit (an atom, a variable, a counter)."""
         return self.observe(worlds, t, [i for u in sorted(units) for i in _bits(u)])
@@ -80,7 +90,7 @@ class Semantics(Rules):
         """§5: ``inform(A)``: the human learns T's value of every unit of A (an atom, a state
         variable, a counter), nothing else is witnessed (k unchanged, no world multiplied,
         also while apart)."""
-        worlds = self.tell(es.worlds, es.true, units)
+        worlds = self.heard(es.worlds, es.true, units)
         after = self.advance(es, INFORM, es.true, es.robot, es.humans, worlds, es.k)
         label = f"inform({', '.join(self.literals(es.true, sorted(units)))})"
         return Step(ROBOT, INFORM, label, _frac(self.p.costs.inform), after)
@@ -93,7 +103,7 @@ class Semantics(Rules):
         after = st.after
         told = self.literals(after.true, units)
         label = f"inform({', '.join(told)}) + {st.act}"
-        heard = replace(after, worlds=self.tell(after.worlds, after.true, units))
+        heard = replace(after, worlds=self.heard(after.worlds, after.true, units))
         return Step(ROBOT, st.kind, label, _frac(self.p.costs.inform) + st.cost, heard,
                     act=st.act, told=told)
 

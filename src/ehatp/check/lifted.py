@@ -23,8 +23,8 @@ from typing import Any
 from ..formats.policy import Policy
 from ..model.grounding import ground_problem
 from ..model.problem import Problem
-from .automorphism import Renaming, lazy, named_objects, ordered_methods
-from .rules import Rules
+from .automorphism import TOKEN, Renaming, lazy, named_objects, ordered_methods
+from .rules import Rules, Worlds
 
 
 @dataclass
@@ -93,6 +93,32 @@ class LiftedCheck:
         self._named = named_objects(problem)
         g = rules.grounded
         self._whole = ground_problem(problem, ahead=sys.maxsize) if lazy(g) else g
+        self.order_issue = False  # an observation whose result a renaming could change
+        twins = {o for c in lifted.classes if isinstance(c, list) and len(c) > 1 for o in c}
+        self.movable = 0  # the atoms naming an interchangeable object
+        for i, name in enumerate(g.atoms):
+            if twins.intersection(TOKEN.findall(name)):
+                self.movable |= 1 << i
+        rules.watch = self.watch
+
+    def watch(self, worlds: Worlds, t: int, mask: int) -> None:
+        """§3: an observation of the atoms ``mask`` (units whole) by worlds ``worlds`` in the
+        true state ``t`` on which the order of the units could matter: two or more units on
+        which the worlds differ, none agreeing with ``t`` on all of them, one naming an
+        interchangeable object. Observation goes unit by unit in index order (§2), which a
+        renaming changes, so the reduction does not hold there."""
+        if not mask & self.movable or self.order_issue:
+            return
+        varying = count = 0
+        for u in self.rules.grounded.units(mask):
+            part = u & mask
+            if len({s & part for s, _ in worlds}) > 1:
+                varying |= part
+                count += 1
+        if count < 2 or not varying & self.movable:
+            return
+        if not any(s & varying == t & varying for s, _ in worlds):
+            self.order_issue = True
 
     def _table(self) -> str | None:
         """Why the declared objects and classes are no table of interchangeable objects

@@ -62,6 +62,12 @@ def _ask_matches(step: Step, label: str) -> bool:
     return any(f"ask({' and '.join(p)})" == label for p in itertools.permutations(step.texts))
 
 
+ORDER = ("a move here observes atoms in an order a renaming changes (two or more units on "
+         "which the worlds differ, none agreeing with T on all of them, one naming an "
+         "interchangeable object): the lifted policy's nodes do not stand for their renamings "
+         "(§3)")
+
+
 @dataclass
 class _Item:
     """A node to check: the state the replay reached it in, the path there, the move into it."""
@@ -345,6 +351,9 @@ class Replay:
                 self.fail([], f"node 0 (start): symmetry.root: {ren}")
                 return None
             states = [ren.estate(es) for es in states]
+            if self.lifted.order_issue:
+                self.fail([], f"node 0 (start): {ORDER}")
+                return None
         for es in states:  # an ambiguous opening is settled by the root's recorded agendas
             if not self.facts(root, es, sem.is_goal(es)):
                 return es
@@ -492,9 +501,15 @@ class Replay:
                       "not a goal (§6)")
             self.end(node.id)
             return []
-        if es.turn == ROBOT:
-            return self.robot_node(node, es, path, where)
-        return self.human_node(node, es, path, where)
+        if self.lifted is not None:
+            self.lifted.order_issue = False
+        kids = (self.robot_node(node, es, path, where) if es.turn == ROBOT
+                else self.human_node(node, es, path, where))
+        if self.lifted is not None and self.lifted.order_issue:
+            self.fail(path, f"{where}: {ORDER}")
+            self.end(node.id)
+            return []
+        return kids
 
     def why_not_goal(self, es: EState) -> str:
         """§6: return why ``es`` is not a goal, the first condition that fails."""

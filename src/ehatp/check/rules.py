@@ -9,7 +9,7 @@ operators, methods, formulas) and plain sets and loops.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import TypeVar
@@ -133,6 +133,9 @@ class Rules:
         self.K = problem.K
         self.atom_of = {a: i for i, a in enumerate(self.grounded.atoms)}
         self.net = Network(self.grounded.task_names)
+        # §3: shown every observation that makes a move's node (situation assessment, an
+        # inform heard): a lifted policy's check watches whether its order could matter
+        self.watch: Callable[[Worlds, int, int], None] | None = None
 
     @property
     def g(self) -> Grounded:
@@ -359,7 +362,10 @@ class Rules:
 
     def sa(self, worlds: Worlds, t: int) -> Worlds:
         """§2: situation assessment (step 2; step 1 is the case where no revision happens)."""
-        return self.observe(worlds, t, _bits(self.grounded.visible_mask(t)))
+        mask = self.grounded.visible_mask(t)
+        if self.watch is not None:
+            self.watch(worlds, t, mask)
+        return self.observe(worlds, t, _bits(mask))
 
     def cop(self, t: int) -> bool:
         """§2: co-presence, on the true state."""
