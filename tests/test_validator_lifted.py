@@ -15,7 +15,7 @@ from typing import Any
 import pytest
 
 import ehatp
-from ehatp import HIDDEN, Domain, HumanModel, Objective, Policy, Problem, Var
+from ehatp import HIDDEN, Domain, HumanModel, Objective, Policy, Problem, Var, observable
 from ehatp.check.communication import Semantics
 from ehatp.check.lifted import Lifted, LiftedCheck, split_v3
 from ehatp.check.validator import Report, validate
@@ -272,14 +272,47 @@ def test_some_shipped_example_is_lifted() -> None:
     assert lifted
 
 
+def lamps() -> Problem:
+    """Both lamps are on, seen only once the light is switched on (the human's one task). The
+    human believes one of two worlds, each with one lamp off and a note beside the other:
+    switching the light on, it observes lamp(a) then lamp(b) (index order) and keeps the
+    world with note(a); in the other order it would keep note(b)."""
+    d = Domain("lamps")
+    item = d.type("item")
+    i = Var("i", item)
+    light = d.predicate("light")
+    d.predicate("lamp", i, observability=observable(light()))
+    d.predicate("note", i, observability=HIDDEN)
+    h = d.human
+    switch = h.action("switch", pre=~light(), effects=[light()])
+    on = h.task("lights_on", done=light())
+    h.method(on, "switch", subtasks=[switch()])
+    return problem(d, init=["lamp(a)", "lamp(b)"], human=["lights_on"],
+                   objects={"item": ["a", "b"]}, human_model=HumanModel(passes=Passes.IDLE),
+                   beliefs=[(["note(a)"], ["lamp(b)"]), (["note(b)"], ["lamp(a)"])])
+
+
+def lifted_lamps() -> dict[str, Any]:
+    d = lifted_twins()
+    root = _node(0, ["lamp(a)", "lamp(b)"], ["lights_on"], "H", 1, [_move("H", "switch", 1)])
+    root.update(worlds=2, divergence=["lamp(a)", "lamp(b)", "not note(a)", "not note(b)"],
+                world_diffs=[{"true": ["note(a)"], "false": ["lamp(b)"]},
+                             {"true": ["note(b)"], "false": ["lamp(a)"]}])
+    leaf = _node(1, ["lamp(a)", "lamp(b)", "light"], [], None, 0, [])
+    leaf.update(divergence=["not note(a)"], world_diffs=[{"true": ["note(a)"], "false": []}])
+    d.update(nodes=[root, leaf], domain="lamps", cost=1, leaves=1, worst_case=1, expected=1)
+    return d
+
+
 def test_an_observation_whose_order_a_renaming_changes() -> None:
-    # both lamps are on; the human believes one of two worlds, each with one lamp off and a
-    # note beside the other: situation assessment at the start observes lamp(a) then lamp(b)
-    # (index order) and keeps note(a); the swap is an automorphism, yet in the other order the
-    # human would keep note(b): the root does not stand for its renamings (§3)
-    worlds = [(["note(a)"], ["lamp(b)"]), (["note(b)"], ["lamp(a)"])]
-    p = twins(init=("lamp(a)", "lamp(b)"), beliefs=worlds)
-    assert reason(p, [1, 0]) == ""
-    r = caught(p, lifted_twins(), "node 0 (start): a move here observes atoms in an order a "
-               "renaming changes", "(§3)")
+    p = lamps()
+    assert reason(p, [1, 0]) == ""  # the swap is an automorphism
+    d = lifted_lamps()
+    r = check(p, d)
+    assert r.ok, r.violations  # the root stands for the real root itself
+    # the root standing for the real root renamed: switching on there observes the lamps in
+    # the other order, so the leaf does not stand for the real successor (§3)
+    d["symmetry"]["root"] = 1
+    r = caught(p, d, "node 0 (start, renamed by renaming 1 (a→b, b→a)): a move here observes "
+               "atoms in an order a renaming changes", "(§3)")
     assert len(r.violations) == 1

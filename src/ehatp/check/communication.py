@@ -43,6 +43,9 @@ class Semantics(Rules):
 
     def __init__(self, problem: Problem) -> None:
         super().__init__(problem)
+        # §3: shown the informing set a policy's inform tells when name order chose it among
+        # sets equally good on everything else (a lifted policy's check watches it)
+        self.ties: Callable[[tuple[int, ...], list[tuple[int, ...]]], None] | None = None
         self._plans: dict[tuple[Agenda, int, int], frozenset[tuple[int, ...]]] = {}
 
     def initial(self) -> EState:
@@ -339,6 +342,10 @@ class Semantics(Rules):
 
         best = min(sets, key=key)
         if best == atoms:
+            if self.ties is not None:  # §3: name order decided between equally good sets
+                tied = [a for a in sets if a != atoms and key(a)[:2] == key(atoms)[:2]]
+                if tied:
+                    self.ties(atoms, tied)
             return None
         told = ", ".join(self.literals(es.true, best))
         return f"not the informing set the rules choose among smallest sets (fewest worlds " \

@@ -24,6 +24,7 @@ from ..formats.policy import Policy
 from ..model.grounding import ground_problem
 from ..model.problem import Problem
 from .automorphism import TOKEN, Renaming, lazy, named_objects, ordered_methods
+from .communication import Semantics
 from .rules import Rules, Worlds
 
 
@@ -99,7 +100,19 @@ class LiftedCheck:
         for i, name in enumerate(g.atoms):
             if twins.intersection(TOKEN.findall(name)):
                 self.movable |= 1 << i
+        self.tie_issue = False  # an informing set chosen by name, a renaming could change
         rules.watch = self.watch
+        if isinstance(rules, Semantics):
+            rules.ties = self.tied
+
+    def tied(self, chosen: tuple[int, ...], others: list[tuple[int, ...]]) -> None:
+        """§3, §5: the informing set ``chosen`` won over ``others`` by atom names alone; when
+        one of them names an interchangeable object, a renaming can change the names' order,
+        so the real states the node stands for may choose another set."""
+        for units in (chosen, *others):
+            if any(u & self.movable for u in units):
+                self.tie_issue = True
+                return
 
     def watch(self, worlds: Worlds, t: int, mask: int) -> None:
         """§3: an observation of the atoms ``mask`` (units whole) by worlds ``worlds`` in the
@@ -159,6 +172,43 @@ class LiftedCheck:
         if got is None:
             got = self._done[rid] = self._check(rid, lf.renamings[rid])
         return got
+
+    def renamed_nodes(self, policy: Policy, order: list[int]) -> set[int]:
+        """The nodes (``order``: children first) that stand for a real state through a
+        renaming other than the identity on some path from the root: where a step must not
+        depend on a decision a renaming changes (§3). Each node keeps at most two of the
+        renamings composed along the paths to it (``tau``: the node's names to the real ones),
+        enough to tell whether one is not the identity."""
+        lf = self.lifted
+        perm: dict[Any, tuple[int, ...]] = {}
+
+        def inverse(rid: Any) -> tuple[int, ...] | None:
+            if rid not in perm:
+                ren = self.renaming(rid)
+                if isinstance(ren, str):
+                    return None
+                inv = [0] * len(lf.renamings[rid])
+                for i, j in enumerate(lf.renamings[rid]):
+                    inv[j] = i
+                perm[rid] = tuple(inv)
+            return perm[rid]
+
+        root = inverse(lf.root)
+        if root is None:
+            return set()
+        taus: dict[int, list[tuple[int, ...]]] = {0: [root]}
+        for n in reversed(order):  # parents first
+            for j, move in enumerate(policy.nodes[n].moves):
+                inv = inverse(lf.renaming_of(n, j))
+                if inv is None:
+                    continue
+                kept = taus.setdefault(move.to, [])
+                for tau in taus.get(n, []):
+                    child = tuple(tau[i] for i in inv)
+                    if len(kept) < 2 and child not in kept:
+                        kept.append(child)
+        ident = tuple(range(len(lf.objects)))
+        return {n for n, ts in taus.items() if any(t != ident for t in ts)}
 
     def checked(self) -> set[int]:
         """The renamings checked so far (the ones the replay used)."""

@@ -68,6 +68,11 @@ ORDER = ("a move here observes atoms in an order a renaming changes (two or more
          "(§3)")
 
 
+TIE = ("the robot's inform here is chosen by atom names among informing sets equally good on "
+       "everything else, one naming an interchangeable object: a renaming can change the "
+       "choice, so the lifted policy's nodes do not stand for their renamings (§3, §5)")
+
+
 @dataclass
 class _Item:
     """A node to check: the state the replay reached it in, the path there, the move into it."""
@@ -103,6 +108,7 @@ class Replay:
         self.ends: dict[int, int] = {}
         self.goes_on: dict[int, list[int]] = {}
         self.lifted: LiftedCheck | None = None  # a lifted policy's renamings (version 3)
+        self.renamed: set[int] = set()  # its nodes standing for a renamed real state (§3)
 
     def fail(self, path: Sequence[str], rule: str) -> None:
         self.violations.append(f"branch [{', '.join(path)}]: {rule}")
@@ -351,9 +357,6 @@ class Replay:
                 self.fail([], f"node 0 (start): symmetry.root: {ren}")
                 return None
             states = [ren.estate(es) for es in states]
-            if self.lifted.order_issue:
-                self.fail([], f"node 0 (start): {ORDER}")
-                return None
         for es in states:  # an ambiguous opening is settled by the root's recorded agendas
             if not self.facts(root, es, sem.is_goal(es)):
                 return es
@@ -502,11 +505,12 @@ class Replay:
             self.end(node.id)
             return []
         if self.lifted is not None:
-            self.lifted.order_issue = False
+            self.lifted.order_issue = self.lifted.tie_issue = False
         kids = (self.robot_node(node, es, path, where) if es.turn == ROBOT
                 else self.human_node(node, es, path, where))
-        if self.lifted is not None and self.lifted.order_issue:
-            self.fail(path, f"{where}: {ORDER}")
+        if self.lifted is not None and node.id in self.renamed and (
+                self.lifted.order_issue or self.lifted.tie_issue):
+            self.fail(path, f"{where}: {ORDER if self.lifted.order_issue else TIE}")
             self.end(node.id)
             return []
         return kids

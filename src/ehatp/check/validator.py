@@ -92,6 +92,8 @@ def validate(problem: Problem, policy: Policy, lifted: Lifted | None = None) -> 
     root_es = rp.replay_after()
     found = rp.order()
     order = found if isinstance(found, list) else None
+    if rp.lifted is not None and order is not None:
+        rp.renamed = rp.lifted.renamed_nodes(policy, order)
     if root_es is not None:
         rp.walk(root_es)
     if order is None:
