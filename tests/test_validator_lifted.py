@@ -20,6 +20,7 @@ from ehatp.check.communication import Semantics
 from ehatp.check.lifted import Lifted, LiftedCheck, split_v3
 from ehatp.check.validator import Report, validate
 from ehatp.formats import policy as policy_format
+from ehatp.model.formula import exists
 from ehatp.model.options import Passes
 
 from .conftest import EXAMPLES, Example, solved
@@ -234,8 +235,9 @@ needs_v3 = pytest.mark.skipif(not _reads_v3(), reason="the policy reader does no
 
 
 @needs_v3
-def test_the_planner_lifts_twins_and_it_validates() -> None:
-    p = twins()
+@pytest.mark.parametrize("name", ["twins", "spares"])
+def test_the_planner_lifts_twins_and_it_validates(name: str) -> None:
+    p = twins() if name == "twins" else spares()
     policy = ehatp.solve(p).policy
     assert policy is not None and getattr(policy, "symmetry", None) is not None
     assert validate(p, policy).ok
@@ -315,4 +317,52 @@ def test_an_observation_whose_order_a_renaming_changes() -> None:
     d["symmetry"]["root"] = 1
     r = caught(p, d, "node 0 (start, renamed by renaming 1 (a→b, b→a)): a move here observes "
                "atoms in an order a renaming changes", "(§3)")
+    assert len(r.violations) == 1
+
+
+def spares() -> Problem:
+    """Two spare parts are available; the human believes neither is, so it cannot fetch one
+    (``fetch`` needs some part available). Telling it avail(a) or avail(b) fixes that equally
+    well: the robot's inform is chosen by atom name, avail(a) (§5)."""
+    d = Domain("spares")
+    item = d.type("item")
+    i = Var("i", item)
+    avail = d.predicate("avail", i, observability=HIDDEN)
+    fetched = d.predicate("fetched")
+    h = d.human
+    fetch = h.action("fetch", pre=exists(i, avail(i)), effects=[fetched()])
+    get = h.task("get", done=fetched())
+    h.method(get, "fetch", subtasks=[fetch()])
+    return problem(d, init=["avail(a)", "avail(b)"], human=["get"], starts="robot",
+                   objects={"item": ["a", "b"]}, human_model=HumanModel(passes=Passes.IDLE),
+                   beliefs=[([], ["avail(a)", "avail(b)"])])
+
+
+def lifted_spares() -> dict[str, Any]:
+    d = lifted_twins()
+    both = ["avail(a)", "avail(b)"]
+    root = _node(0, both, ["get"], "R", 2, [_move("R", "inform(avail(a))", 1)])
+    root["moves"][0].update(kind="inform", name="inform", args=["avail(a)"])
+    root.update(divergence=both, world_diffs=[{"true": [], "false": both}])
+    mid = _node(1, both, ["get"], "H", 1, [_move("H", "fetch", 2)])
+    leaf = _node(2, [*both, "fetched"], [], None, 0, [])
+    for n in (mid, leaf):
+        n.update(divergence=["avail(b)"], world_diffs=[{"true": [], "false": ["avail(b)"]}])
+    d.update(nodes=[root, mid, leaf], domain="spares", cost=2, leaves=1, worst_case=2,
+             communications=1,
+             expected=2)
+    return d
+
+
+def test_an_inform_chosen_by_name_at_a_renamed_node() -> None:
+    p = spares()
+    assert reason(p, [1, 0]) == ""
+    d = lifted_spares()
+    r = check(p, d)
+    assert r.ok, r.violations
+    # standing for the real root renamed, the node's inform(avail(a)) is inform(avail(b)) on
+    # the real objects, which is not the set the rules choose there (name order, §5)
+    d["symmetry"]["root"] = 1
+    r = caught(p, d, "node 0 (start, renamed by renaming 1 (a→b, b→a)): the robot's inform "
+               "here is chosen by atom names", "(§3, §5)")
     assert len(r.violations) == 1
