@@ -9,6 +9,7 @@ are renamings of each other, so the lifted policy has one node for both (4 nodes
 from __future__ import annotations
 
 import copy
+import dataclasses
 from fractions import Fraction
 from typing import Any
 
@@ -30,7 +31,7 @@ SWAP = [[0, 1], [1, 0]]
 
 
 def twins(*, init: tuple[str, ...] = (), preferred: bool = False,
-          objective: Objective | None = None,
+          objective: Objective | None = None, unordered: bool = False,
           beliefs: list[tuple[list[str], list[str]]] | None = None,
           items: tuple[str, ...] = ("a", "b"), agenda: int = 2) -> Problem:
     """Items the human takes one at a time (``take_one``, any item not taken); ``preferred``
@@ -48,6 +49,8 @@ def twins(*, init: tuple[str, ...] = (), preferred: bool = False,
     h.method(one, "any", params=[i], pre=~taken(i), subtasks=[take(i)])
     if preferred:
         h.method(one, "pref", pre=~taken("a"), subtasks=[take("a")])
+    if unordered:  # a partially ordered method (of one subtask: nothing else changes)
+        h.method(one, "loose", params=[i], pre=~taken(i), subtasks=[take(i)], order=[])
     return problem(d, init=init, human=["take_one"] * agenda,
                    objects={"item": list(items), "place": ["p"]}, objective=objective,
                    beliefs=beliefs,
@@ -366,3 +369,19 @@ def test_an_inform_chosen_by_name_at_a_renamed_node() -> None:
     r = caught(p, d, "node 0 (start, renamed by renaming 1 (a→b, b→a)): the robot's inform "
                "here is chosen by atom names", "(§3, §5)")
     assert len(r.violations) == 1
+
+
+def test_a_model_grounded_on_demand_is_checked_whole() -> None:
+    # [limits] ground_ahead = 1: the validator's models are grounded only in part, so the
+    # automorphism check grounds the problem whole
+    p = twins()
+    p = dataclasses.replace(p, limits=dataclasses.replace(p.limits, ground_ahead=1))
+    assert check(p, lifted_twins()).ok
+    q = twins(preferred=True)
+    q = dataclasses.replace(q, limits=dataclasses.replace(q.limits, ground_ahead=1))
+    caught(q, lifted_twins(), "not an automorphism of the problem (§3)", "methods of take_one")
+
+
+def test_partially_ordered_methods_turn_the_reduction_off() -> None:
+    caught(twins(unordered=True), lifted_twins(), "node 1 (H take(a))",
+           "partially ordered methods turn the reduction off (§3)")

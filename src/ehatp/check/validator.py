@@ -27,10 +27,20 @@ robot node has one move, a human node never two moves with the same label (that 
 on a hidden choice), and each recorded edge leads to the node of the move it names, also when
 several robot moves share a label.
 
+A lifted policy (format version 3: canonical nodes, each edge with the renaming of
+interchangeable objects that maps its successor onto its child) is checked without expanding
+it (§3, "Symmetry"): every renaming it uses is a permutation within its declared classes and an
+automorphism of the ground problem, the root is the initial node renamed by the table's root
+renaming, each edge's successor renamed is its child, and where a node stands for a renamed
+real state no move there decides by index or name order (observation order, the informing
+set's name tie-break). Values, costs and counts are checked as for version 2.
+
 The validator in modules: :mod:`.rules` (refinement, observation, moves, goal: §1-§4, §6),
 :mod:`.network` (partially ordered agendas, §1), :mod:`.communication` (§5), :mod:`.replay`
-(walking the policy, comparing recorded facts and moves) and :mod:`.summary` (values, costs
-and counts, §7); this module checks a policy with them and gives the verdict.
+(walking the policy, comparing recorded facts and moves), :mod:`.summary` (values, costs
+and counts, §7), :mod:`.automorphism` (renamings of interchangeable objects, §3) and
+:mod:`.lifted` (a lifted policy's table and renamings); this module checks a policy with them
+and gives the verdict.
 """
 
 from __future__ import annotations
