@@ -263,12 +263,18 @@ def test_every_lifted_example_validates(example: Example) -> None:
     used = [m for m in moves if m.get("renaming")]
     table = d["symmetry"]["renamings"]
     if used:
-        del used[0]["renaming"]
+        tampered = used[0]
+        del tampered["renaming"]
     elif len(table) > 1 and moves:
-        moves[0]["renaming"] = 1
+        tampered = moves[0]
+        tampered["renaming"] = 1
     else:
         return
-    assert not validate(p, Policy.from_dict(d)).ok
+    r = validate(p, Policy.from_dict(d))
+    assert not r.ok
+    assert "\n" not in r.message
+    assert f"node {tampered['to']} ({tampered['agent']} {tampered['action']}" in r.message, \
+        r.message
 
 
 @needs_v3

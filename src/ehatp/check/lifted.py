@@ -150,7 +150,8 @@ class LiftedCheck:
             return f"symmetry.objects names {unknown[0]!r}, not an object of the problem"
         members = [o for c in lf.classes if isinstance(c, list) for o in c]
         if (not all(isinstance(c, list) for c in lf.classes)
-                or sorted(map(str, members)) != sorted(objs)):
+                or not all(isinstance(o, str) for o in members)
+                or sorted(members) != sorted(objs)):
             return "symmetry.classes must put each of symmetry.objects in exactly one class"
         for c in lf.classes:
             if len({frozenset(types[o]) for o in c}) > 1:
