@@ -30,8 +30,9 @@ Cost = int | Fraction
 
 POLICY_FIX = "give a policy JSON written by `ehatp solve --out FILE`"
 FORMAT = "ehatp-policy"
-VERSION = 2  # the version written; READS lists every version read
-READS = (1, 2)
+VERSION = 2  # the version written for a policy over real states; READS lists every version read
+VERSION_LIFTED = 3  # the version written for a lifted policy (canonical nodes, renamings)
+READS = (1, 2, 3)
 COMM_KINDS = ("inform", "ask", "announce")
 
 
@@ -47,6 +48,9 @@ class PolicyMove:
     cost: Cost
     to: int  # the id of the node the move leads to
     told: list[str] = field(default_factory=list)  # literals said with an action (speech)
+    # version 3: the renaming (an index into the policy's symmetry table) that maps the move's
+    # child, seen from this node, onto the node ``to``; 0 (the identity) is not written
+    renaming: int = 0
 
     @property
     def communicates(self) -> bool:
@@ -56,7 +60,7 @@ class PolicyMove:
     def to_dict(self) -> dict[str, Any]:
         return {"agent": self.agent, "kind": self.kind, "action": self.action,
                 "name": self.name, "args": self.args, "cost": num(self.cost), "to": self.to,
-                "told": self.told}
+                "told": self.told, **({"renaming": self.renaming} if self.renaming else {})}
 
 
 @dataclass
@@ -192,6 +196,20 @@ class Policy:
     objective: dict[str, Any] = field(default_factory=lambda: {"kind": "worst-case"})
     worst_case: Cost | None = None  # the policy's worst-case cost (None: not recorded)
     expected: Cost | None = None  # its expected cost over human choices
+    # version 3, a lifted policy: {"objects": [...], "classes": [[...], ...], "renamings":
+    # [[int, ...], ...], "root": int}; None for a policy over real states (version 2)
+    symmetry: dict[str, Any] | None = None
+
+    @property
+    def lifted(self) -> bool:
+        """Whether this is a lifted policy (version 3): its nodes are canonical states, its
+        moves carry renamings (:mod:`ehatp.formats.lifted` realises it)."""
+        return self.symmetry is not None
+
+    @property
+    def version(self) -> int:
+        """The format version this policy is written in."""
+        return VERSION_LIFTED if self.symmetry is not None else VERSION
 
     # -- the graph ----------------------------------------------------------------------------
 
@@ -271,7 +289,8 @@ class Policy:
         """The file's JSON object; ``check`` (e.g. a time limit's) is called every few
         hundred nodes and may raise to stop the work."""
         return {
-            "format": FORMAT, "version": VERSION, "problem": self.problem, "domain": self.domain,
+            "format": FORMAT, "version": self.version, "problem": self.problem,
+            "domain": self.domain,
             "agents": self.agents, "K": self.K, "costs": self.costs, "cost": num(self.cost),
             "communications": self.communications, "leaves": self.leaves,
             "optimal": self.optimal, "stats": self.stats, "after": self.after,
@@ -279,6 +298,7 @@ class Policy:
             "worst_case": None if self.worst_case is None else num(self.worst_case),
             "expected": None if self.expected is None else num(self.expected),
             "nodes": [n.to_dict() for n in _checked(self.nodes, check)],
+            **({"symmetry": self.symmetry} if self.symmetry is not None else {}),
         }
 
     def to_json(self, check: Callable[[], None] | None = None) -> str:
@@ -301,8 +321,9 @@ class Policy:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> Policy:
-        """A policy from its JSON object, version 2 or 1 (a version 1 tree becomes a graph
-        with one node per tree node). Trusts the shapes: :meth:`load` checks them."""
+        """A policy from its JSON object, version 3, 2 or 1 (a version 1 tree becomes a graph
+        with one node per tree node; a version 3 policy stays lifted). Trusts the shapes:
+        :meth:`load` checks them."""
         if d.get("format") != FORMAT:
             raise ValueError(f"not an ehatp policy (format is {d.get('format')!r})")
         version = d.get("version")
@@ -316,7 +337,8 @@ class Policy:
         return cls(d["problem"], d["domain"], d["agents"], d["K"], d["costs"], nodes, d["cost"],
                    d["communications"], d["leaves"], d.get("optimal", True), d.get("stats", {}),
                    d.get("after", []), d.get("objective", {"kind": "worst-case"}),
-                   d.get("worst_case"), d.get("expected"))
+                   d.get("worst_case"), d.get("expected"),
+                   _symmetry(d["symmetry"]) if version == VERSION_LIFTED else None)
 
     @classmethod
     def read(cls, path: str | Path) -> Policy:
@@ -360,6 +382,7 @@ class Policy:
     def _check_graph(self, name: str) -> None:
         # readers follow moves blindly; a hand-edited file must not send them into a loop
         n = len(self.nodes)
+        renamings = len(self.symmetry["renamings"]) if self.symmetry is not None else 1
         if n == 0:
             raise InputError(name, "nodes", "the policy has no nodes", POLICY_FIX)
         if not isinstance(self.agents, dict) or not {"robot", "human"} <= self.agents.keys():
@@ -377,6 +400,11 @@ class Policy:
                     raise InputError(name, f"nodes[{i}].moves[{j}].to",
                                      f"{m.to!r} is not the id of a node other than the root",
                                      POLICY_FIX)
+                if not isinstance(m.renaming, int) or isinstance(m.renaming, bool) \
+                        or not 0 <= m.renaming < renamings:
+                    raise InputError(name, f"nodes[{i}].moves[{j}].renaming",
+                                     f"{m.renaming!r} is not the index of a renaming in the "
+                                     "symmetry table", POLICY_FIX)
             if not isinstance(node.world_diffs, list) or not isinstance(node.state, list):
                 raise InputError(name, f"nodes[{i}]", "world_diffs and state must be lists",
                                  POLICY_FIX)
@@ -387,6 +415,34 @@ class Policy:
         if reached != n:
             raise InputError(name, "nodes", f"{n - reached} node(s) are not below the root",
                              POLICY_FIX)
+
+
+def _symmetry(table: Any) -> dict[str, Any]:
+    """A version 3 file's ``symmetry`` table, its shape checked (ValueError naming what is
+    wrong): objects, classes, renamings (permutations of the objects' indices, the first
+    the identity) and the root's renaming."""
+    if not isinstance(table, dict) or set(table) != {"objects", "classes", "renamings", "root"}:
+        raise ValueError("symmetry must be an object with objects, classes, renamings, root")
+    objects, renamings, root = table["objects"], table["renamings"], table["root"]
+    if not isinstance(objects, list) or not all(isinstance(o, str) for o in objects):
+        raise ValueError("symmetry.objects must be a list of names")
+    n = len(objects)
+    if not isinstance(renamings, list) or not renamings:
+        raise ValueError("symmetry.renamings must be a non-empty list")
+    for i, p in enumerate(renamings):
+        if not isinstance(p, list) or sorted(p) != list(range(n)) \
+                or any(isinstance(x, bool) for x in p):
+            raise ValueError(f"symmetry.renamings[{i}] is not a permutation of the "
+                             f"{n} objects' indices")
+    if renamings[0] != list(range(n)):
+        raise ValueError("symmetry.renamings[0] must be the identity")
+    if not isinstance(root, int) or isinstance(root, bool) or not 0 <= root < len(renamings):
+        raise ValueError(f"symmetry.root {root!r} is not the index of a renaming")
+    classes = table["classes"]
+    if not isinstance(classes, list) or not all(
+            isinstance(c, list) and all(isinstance(o, str) for o in c) for c in classes):
+        raise ValueError("symmetry.classes must be a list of lists of names")
+    return table
 
 
 def topological_order(nodes: list[PolicyNode]) -> list[int]:
@@ -524,6 +580,7 @@ def timeline(policy: Policy, branch: Branch) -> dict[str, Any]:
     return {"leaf": branch[-1].id, "steps": steps}
 
 
-__all__ = ["COMM_KINDS", "FORMAT", "POLICY_FIX", "READS", "VERSION", "Branch", "Cost", "malformed",
+__all__ = ["COMM_KINDS", "FORMAT", "POLICY_FIX", "READS", "VERSION", "VERSION_LIFTED", "Branch",
+           "Cost", "malformed",
            "PathStep", "Policy", "PolicyMove", "PolicyNode", "label_key", "num", "timeline",
            "topological_order"]
