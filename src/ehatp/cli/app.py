@@ -64,6 +64,8 @@ COMMANDS: dict[str, Entry] = {
     "bench": Entry("bench", "Re-run the paper's benchmarks and compare with its figures; "
                             "measure how the planner scales."),
     "export": Entry("export", "Write a policy in another tool's format."),
+    "expand": Entry("expand", "Write the version 2 graph, over the real objects, of a lifted "
+                              "policy (format version 3)."),
 }
 
 

@@ -10,6 +10,7 @@ import typer
 from ..errors import InputError
 from ..formats.bt import BTFormat, answers_of, from_policy, to_btcpp, to_py_trees_source
 from ..formats.policy_check import check_policy_problem, read_policy
+from ..run.expand import expand_policy
 from .common import command_app, load_problem, user_errors, write_output
 
 app = command_app(name="export", help="Write a policy in another tool's format.",
@@ -39,6 +40,7 @@ def export_bt(
         prob = load_problem(problem)
         with user_errors(policy):
             check_policy_problem(pol, policy, prob)
+            pol = expand_policy(prob, pol)  # a lifted policy: its graph on the real objects
             answers = answers_of(prob, pol)
     with user_errors(policy):
         try:

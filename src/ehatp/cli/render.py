@@ -42,6 +42,10 @@ def render_command(
         prob = load_problem(problem)
         with user_errors(policy):
             check_policy_problem(pol, policy, prob)
+            if pol.symmetry is not None:  # lifted: expanded with the problem's own labels
+                from ..run.expand import expand_policy
+
+                pol = expand_policy(prob, pol)
     with user_errors(policy):
         try:
             text, notes = render(pol, fmt, max_depth=max_depth, max_nodes=max_nodes,

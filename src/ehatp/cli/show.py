@@ -42,6 +42,12 @@ def show_cmd(
     The file's structure is checked first (exit 2 if it was edited into something else).
     """
     pol = load_policy(policy, problem)
+    if problem is not None and pol.symmetry is not None:  # lifted: its real labels
+        from ..run.expand import expand_policy
+        from .common import load_problem, user_errors
+
+        with user_errors(policy):
+            pol = expand_policy(load_problem(problem), pol)
     from ..formats.text import plain, policy_lines, print_rich
 
     lines = policy_lines(pol, tree=tree, timelines=timelines, details=details)

@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Any
 from xml.sax.saxutils import escape
 
 from .bt_tree import MAIN_TREE, SEP, BTNode, Forest, blackboard_key, tree_id
+from .lifted import expanded
 from .policy import Policy, PolicyMove
 
 if TYPE_CHECKING:
@@ -96,7 +97,10 @@ def shared_nodes(policy: Policy) -> list[int]:
 def from_policy(policy: Policy, answers: dict[tuple[int, str], bool] | None = None) -> Forest:
     """The behaviour tree of ``policy``. ``answers`` maps (policy node, question asked there)
     to the robot's truthful answer (:func:`answers_of`); without it the ``Say`` of an answer
-    leaves the answer to the robot."""
+    leaves the answer to the robot. A lifted policy (format version 3) is expanded first
+    (:func:`~ehatp.formats.lifted.expanded`; give the expansion of
+    :func:`ehatp.run.expand.expand_policy` when ``answers`` come from :func:`answers_of`)."""
+    policy = expanded(policy)
     shared = set(shared_nodes(policy))
     robot = policy.agents["robot"]
     answers = answers or {}
@@ -178,9 +182,13 @@ def robot_nodes(m: PolicyMove) -> list[BTNode]:
 def answers_of(problem: Problem, policy: Policy) -> dict[tuple[int, str], bool]:
     """The robot's truthful answer to every question the policy's human may ask, by (policy
     node, question label): the policy is walked with the problem's semantics (each node once).
-    Raises :class:`~ehatp.errors.PolicyMismatch` when the policy does not fit."""
+    Raises :class:`~ehatp.errors.PolicyMismatch` when the policy does not fit. A lifted policy
+    (format version 3) is expanded first (:func:`ehatp.run.expand.expand_policy`: the nodes
+    are that graph's)."""
     from ..run.executor import Executor
+    from ..run.expand import expand_policy
 
+    policy = expand_policy(problem, policy)
     ex = Executor(problem, policy)
     ex.replay_opening()
     states = {0: ex.state}
@@ -263,6 +271,10 @@ def build_py_tree(policy: Policy, *, robot: RobotFn, human: HumanFn,
         raise ImportError(f"build_py_tree needs py_trees ({e}): pip install 'ehatp[bt]'"
                           ) from None
 
+    if problem is not None and policy.symmetry is not None:  # lifted: expanded on the problem
+        from ..run.expand import expand_policy
+
+        policy = expand_policy(problem, policy)
     forest = from_policy(policy, None if problem is None else answers_of(problem, policy))
     return bt_py_trees.build(forest, bt_py_trees.Interface(robot, human, on_goal, on_uncovered))
 

@@ -32,6 +32,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import DotMissing
+from .lifted import expanded
 from .policy import COMM_KINDS, Policy, PolicyMove, PolicyNode
 from .policy_check import read_policy
 
@@ -109,7 +110,9 @@ def plan_view(policy: Policy, *, max_depth: int | None = None,
     ``max_nodes``. Then a breadth-first walk draws nodes down to ``max_depth`` and while the
     budget lasts; a node whose children do not all fit is drawn with a stub counting the nodes
     folded below it (all children or none, so a human choice is never shown half-expanded).
+    A lifted policy (format version 3) is drawn expanded.
     """
+    policy = expanded(policy)
     total = len(policy.nodes)
     if share is None:
         share = max_nodes is not None and total > max_nodes
@@ -247,9 +250,10 @@ def node_attrs(policy: Policy, n: PolicyNode, entered: list[PolicyMove],
 
 def to_dot(policy: Policy, view: View | None = None) -> graphviz.Digraph:
     """The policy (or the part ``view`` keeps) as a Graphviz digraph: one node per policy node,
-    one edge per move."""
+    one edge per move (a lifted policy expanded, as :func:`plan_view` draws it)."""
     import graphviz
 
+    policy = expanded(policy)
     view = view or plan_view(policy, max_nodes=None, share=False)
     kind = "expected" if policy.objective.get("kind") == "expected" else "worst-case"
     title = (f"{policy.problem} ({policy.domain}): {kind} cost {policy.cost}, "
@@ -317,7 +321,9 @@ def _script_json(data: Any) -> str:
 
 def to_html(policy: Policy, *, max_depth: int | None = None,
             max_nodes: int | None = DEFAULT_MAX_NODES) -> str:
-    """The self-contained explorer page; depth cap and budget only set what starts folded."""
+    """The self-contained explorer page; depth cap and budget only set what starts folded. A
+    lifted policy (format version 3) is drawn expanded (:func:`~ehatp.formats.lifted.expanded`)."""
+    policy = expanded(policy)
     data = policy.to_dict()
     config = {"maxDepth": max_depth, "maxNodes": max_nodes}
     parts = {
@@ -340,8 +346,9 @@ def render(path: str | Path | Policy, fmt: Format = Format.dot, *, max_depth: in
            max_nodes: int | None = DEFAULT_MAX_NODES,
            share: bool | None = None) -> tuple[str, list[str]]:
     """The rendered text and the collapse notes (empty when drawn whole). A path is read
-    with its structure checked (:func:`~ehatp.formats.policy_check.read_policy`)."""
-    policy = path if isinstance(path, Policy) else read_policy(path)
+    with its structure checked (:func:`~ehatp.formats.policy_check.read_policy`); a lifted
+    policy (format version 3) is drawn expanded (:func:`~ehatp.formats.lifted.expanded`)."""
+    policy = expanded(path if isinstance(path, Policy) else read_policy(path))
     if fmt is Format.html:
         return to_html(policy, max_depth=max_depth, max_nodes=max_nodes), []
     view = plan_view(policy, max_depth=max_depth, max_nodes=max_nodes, share=share)

@@ -19,6 +19,7 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
 from ..model.problem import Problem
+from .lifted import expanded
 from .policy import COMM_KINDS, Policy, PolicyMove, PolicyNode, timeline
 
 if TYPE_CHECKING:
@@ -227,6 +228,9 @@ def timeline_lines(policy: Policy, limit: int | None = MAX_TIMELINES) -> list[Li
 def policy_lines(policy: Policy, *, tree: bool = True, timelines: bool = True,
                  details: bool = False, max_timelines: int | None = MAX_TIMELINES
                  ) -> list[Line]:
+    """The lines of ``ehatp show``; a lifted policy (format version 3) is expanded first
+    (:func:`~ehatp.formats.lifted.expanded`)."""
+    policy = expanded(policy)
     lines = header(policy)
     if tree:
         lines += [Line((), []), Line((), [("Tree", "bold")]), *tree_lines(policy, details)]

@@ -12,6 +12,12 @@ The executor moves along the policy's recorded edges: where several moves share 
 policy names (two robot methods that start with the same action), it takes the one whose result
 is the node the edge leads to (:meth:`Executor.edge_move`), never merely the first.
 
+A lifted policy (format version 3, docs/policy-format.md) is realised lazily, never expanded:
+the executor keeps the renaming ``tau`` from the current canonical node to the real state and
+reads the node, its moves and the nodes they lead to through it (:attr:`Executor.node` is the
+node on the real objects, its id the canonical node's); each move's label is the real
+semantics' own (the move with the renamed child, preferably the renamed label).
+
 When the human leaves the policy, :meth:`Executor.as_problem` states the execution so far as a new
 problem and :meth:`Executor.replan` plans from where the robot is and follows the new policy. See
 ``docs/simulation.md`` and ``docs/execution.md``.
@@ -43,6 +49,7 @@ from ..errors import (
     PolicyMismatch,
     UncoveredHumanAction,
 )
+from ..formats.lifted import Perm, Renamings
 from ..formats.policy import Policy, PolicyMove, PolicyNode, label_key
 from ..model.formula import conj
 from ..model.grounding import Grounded, ground_problem
@@ -150,8 +157,11 @@ class Executor:
                                  f" but the problem's opening is {list(problem.after)}; "
                                  "solve this problem again")
         self.problem = problem
-        self.policy = policy
         self.grounded = ground_problem(problem)
+        self.policy = policy
+        self._lifted: Renamings | None = None
+        self.tau: Perm = ()  # lifted: the renaming from the current node to the real state
+        self._use(policy)
         self.sem = _TracingSemantics(self.grounded)
         self.robot_name, self.human_name = self.sem.names
         self.state: EState = self.sem.initial()
@@ -327,21 +337,25 @@ class Executor:
         if result.policy is None:
             raise ExecutionError(f"no policy from here: {result.reason or result.status}")
         if move is None and self.node is None:  # within the opening: the policy follows it
-            self.problem, self.policy = problem, result.policy
+            self.problem = problem
+            self._use(result.policy)
             return result
         before, assessed = self.state, None
         if move is not None:
             assert move.child is not None
             assessed = self.sem.seen.get((move.child.true, move.child.worlds))
             self.state = move.child
-        root = result.policy.root
+        old = (self.policy, self._lifted, self.tau)
+        self._use(result.policy)
+        root = self._view(0)
         try:
             self._check(root)
         except PolicyMismatch:
             self.state = before
+            self.policy, self._lifted, self.tau = old
             raise
         self._forget()
-        self.problem, self.policy, self.node, self._opening = problem, result.policy, root, []
+        self.problem, self.node, self._opening = problem, root, []
         if move is not None:
             self.history.append(Step(len(self.history) + 1, self._action(move, before.true),
                                      before, self.state, root, False,
@@ -478,7 +492,7 @@ class Executor:
         :class:`PolicyMismatch` when there is none: the policy does not fit the problem."""
         want = label_key(edge.action)
         same = [m for m in self._moves(es) if label_key(m.label) == want]
-        to = self.policy.nodes[edge.to]
+        to = self._target(edge)
         fit = [m for m in same if m.child is not None and not self.differences(m.child, to)]
         if len(fit) > 1:  # equal on what the node records in short: its worlds decide
             fit = [m for m in fit if m.child is not None
@@ -512,9 +526,71 @@ class Executor:
             out.append("robot_agenda")
         if sorted(self._agenda(a) for a in human_agendas(es)) != sorted(node.human_agendas):
             out.append("human_agendas")
-        if self.grounded.state_atoms(es.true) != node.state:
+        if not self._same_state(es.true, node):
             out.append("state")
         return out
+
+    # -- a lifted policy (format version 3) ----------------------------------------------------
+    def _use(self, policy: Policy) -> None:
+        """Follow ``policy`` from now on (its renamings, if lifted, read in the problem's atom
+        and task order)."""
+        self.policy = policy
+        g = self.grounded
+        self._lifted = (None if policy.symmetry is None
+                        else Renamings(policy.symmetry, g.atom_index, g.task_index))
+        self.tau = () if self._lifted is None else self._lifted.root
+
+    def _target(self, edge: PolicyMove) -> PolicyNode:
+        """The node ``edge`` (a move of the current node) leads to, on the real objects."""
+        node = self.policy.nodes[edge.to]
+        if self._lifted is None:
+            return node
+        return self._lifted.node(self._lifted.child(self.tau, edge.renaming), node)
+
+    def _view(self, n: int) -> PolicyNode:
+        """Policy node ``n``, the current one, on the real objects: a lifted node renamed by
+        ``tau``, each move labelled as the real semantics labels the move it stands for (one
+        real move per policy move: the renamed label when it leads to the renamed child, else
+        a move of the same agent, kind and cost that does; docs/policy-format.md)."""
+        node = self.policy.nodes[n]
+        if self._lifted is None:
+            return node
+        view = self._lifted.node(self.tau, node)
+        real = self._moves()
+        names = self.sem.names
+        labels = {label_key(m.label) for m in real}
+        used: set[int] = set()
+        moves: list[PolicyMove | None] = [None] * len(view.moves)
+        for exact in (True, False):
+            for i, pm in enumerate(view.moves):
+                if moves[i] is not None:
+                    continue
+                to, want = self._target(pm), label_key(pm.action)
+                if not exact and want in labels:  # a label of the real semantics: its own
+                    continue
+                j = next((j for j, m in enumerate(real) if j not in used
+                          and m.child is not None and names[m.agent] == pm.agent
+                          and m.kind == pm.kind and m.cost == pm.cost
+                          and (label_key(m.label) == want or not exact)
+                          and not self.differences(m.child, to)), -1)
+                if j < 0:
+                    continue
+                used.add(j)
+                act = self._action(real[j])
+                moves[i] = pm if label_key(act.label) == want else dataclasses.replace(
+                    pm, action=act.label, name=act.name, args=list(act.args),
+                    told=list(act.told))
+        # a move no real move fits stays as renamed: following it says why it does not fit
+        if all(m is pm for m, pm in zip(moves, view.moves, strict=True)):
+            return view
+        return dataclasses.replace(view, moves=[m if m is not None else pm for m, pm
+                                                in zip(moves, view.moves, strict=True)])
+
+    def _same_state(self, t: int, node: PolicyNode) -> bool:
+        """Whether ``node`` records the true state ``t`` (in any order, lifted)."""
+        atoms = self.grounded.state_atoms(t)
+        return atoms == node.state or (self._lifted is not None
+                                       and sorted(atoms) == sorted(node.state))
 
     # -- internals ------------------------------------------------------------------------------
     def strip_agent(self, label: str) -> str:
@@ -620,7 +696,9 @@ class Executor:
             assert edge is not None
             # the node the edge leads to may be shared by other paths: the tracked state is
             # checked against it all the same
-            node = self.policy.nodes[edge.to]
+            if self._lifted is not None:
+                self.tau = self._lifted.child(self.tau, edge.renaming)
+            node = self._view(edge.to)
             self.node = node
             self._check(node)
         step = Step(len(self.history) + 1, self._action(move, before.true), before, self.state,
@@ -630,14 +708,15 @@ class Executor:
         return step
 
     def _enter_policy(self) -> None:
-        self.node = self.policy.root
+        self.node = self._view(0)
         self._check(self.node)
 
     def _check(self, node: PolicyNode) -> None:
         """The policy node and the tracked epistemic state must describe the same situation."""
         es, sem = self.state, self.sem
         names = self.sem.names
-        want = {"state": self.grounded.state_atoms(es.true), "worlds": len(es.worlds), "k": es.k,
+        want = {"state": node.state if self._same_state(es.true, node)
+                else self.grounded.state_atoms(es.true), "worlds": len(es.worlds), "k": es.k,
                 "copresent": sem.copresent(es.true),
                 "to_move": None if node.goal else names[es.turn]}
         got = {"state": node.state, "worlds": node.worlds, "k": node.k,

@@ -20,6 +20,7 @@ from ..errors import ExecutionError
 from ..formats.policy import Policy, label_key
 from ..model.problem import Problem
 from .executor import Executor
+from .expand import expand_policy
 
 if TYPE_CHECKING:
     from ..formats.bt_py_trees import HumanTurn, RobotCommand
@@ -132,6 +133,7 @@ def tick_py_trees(problem: Problem, policy: Policy, *, cap: int = DEFAULT_CAP,
     from ..formats.bt import build_py_tree
 
     try:
+        policy = expand_policy(problem, policy)  # lifted: the tree is the expanded graph's
         start = Executor(problem, policy)
         start.replay_opening()
     except ExecutionError as e:
