@@ -122,7 +122,7 @@ class Solved:
         return iter((self.problem, self.policy))
 
 
-_SOLVED: dict[Path, Result] = {}
+_SOLVED: dict[tuple[Path, bool], Result] = {}
 
 
 def _path(which: Example | str | Path) -> Path:
@@ -133,16 +133,24 @@ def _path(which: Example | str | Path) -> Path:
     return which.resolve()
 
 
-def solved(which: Example | str | Path) -> Solved:
-    """``which`` solved with its own options, once per session; the caller's own copies."""
+def solved(which: Example | str | Path, *, expand: bool = False) -> Solved:
+    """``which`` solved with its own options, once per session; the caller's own copies.
+    ``expand``: the policy over the real objects (format version 2) even where the search ran
+    over canonical states (:func:`solved_v2`)."""
     path = _path(which)
-    result = _SOLVED.get(path)
+    result = _SOLVED.get((path, expand))
     if result is None:
-        result = ehatp.solve(ehatp.load(path))
+        result = ehatp.solve(ehatp.load(path), expand=expand)
         assert result.policy is not None, f"{path}: {result.status}: {result.reason}"
-        _SOLVED[path] = result
+        _SOLVED[(path, expand)] = result
     mine = dataclasses.replace(result, policy=copy.deepcopy(result.policy),
                                stats=copy.deepcopy(result.stats))
     assert mine.policy is not None
     return Solved(ehatp.load(path), mine.policy, mine)
+
+
+def solved_v2(which: Example | str | Path) -> Solved:
+    """:func:`solved` over the real objects (format version 2): for the tests that read or edit
+    a policy's labels and states node by node, as a version 2 file has them."""
+    return solved(which, expand=True)
 

@@ -17,7 +17,7 @@ from ehatp.cli.app import app
 from ehatp.formats import bt
 from ehatp.run.executor import Executor
 
-from .conftest import DATA, EXAMPLES, EXAMPLES_DIR, Example, solved
+from .conftest import DATA, EXAMPLES, EXAMPLES_DIR, Example, solved_v2
 
 CUBES = EXAMPLES_DIR / "cubes"
 RUNS = 100  # seeded random humans per example
@@ -153,7 +153,7 @@ def xml_shape(text: str) -> dict[str, list[tuple[Any, ...]]]:
 
 @pytest.mark.parametrize("example", EXAMPLES, ids=str)
 def test_xml_is_well_formed_complete_and_round_trips(example: Example) -> None:
-    problem, policy = solved(example)
+    problem, policy = solved_v2(example)
     text = bt.to_btcpp(bt.from_policy(policy, bt.answers_of(problem, policy)))
     root = ET.fromstring(text)  # well-formed
     assert root.tag == "root" and root.attrib["BTCPP_format"] == "4"
@@ -181,7 +181,7 @@ def test_xml_is_well_formed_complete_and_round_trips(example: Example) -> None:
 
 
 def test_answers_to_questions() -> None:
-    problem, policy = solved("cubes/qualitative-ask")
+    problem, policy = solved_v2("cubes/qualitative-ask")
     text = bt.to_btcpp(bt.from_policy(policy, bt.answers_of(problem, policy)))
     says = {e.attrib["question"]: e.attrib["answer"] for e in ET.fromstring(text).iter("Say")
             if e.attrib["kind"] == "answer"}
@@ -249,7 +249,7 @@ def test_py_tree_reaches_the_goal_against_the_executor(example: Example) -> None
 
     from ehatp.formats.bt_py_trees import HumanTurn, RobotCommand
 
-    problem, policy = solved(example)
+    problem, policy = solved_v2(example)
     start = Executor(problem, policy)
     start.replay_opening()  # the policy starts after the problem's fixed opening
     run = Run(start.copy(), 0)
@@ -291,7 +291,7 @@ def test_uncovered_human_action_is_reported_once_and_fails() -> None:
     py_trees_or_skip()
     from py_trees.common import Status
 
-    _, policy = solved("cubes/p2")
+    _, policy = solved_v2("cubes/p2")
     choices = iter(["__first__", "dance"])  # covered at the first choice, then uncovered
     turns: list[Any] = []
     reported: list[tuple[str, list[str]]] = []
@@ -312,7 +312,7 @@ def test_robot_running_and_failing() -> None:
     py_trees_or_skip()
     from py_trees.common import Status
 
-    _, policy = solved("cubes/qualitative")
+    _, policy = solved_v2("cubes/qualitative")
     calls: list[str] = []
 
     def slow(cmd: Any) -> bool | None:  # each command runs for two ticks
@@ -331,7 +331,7 @@ def test_py_trees_module_builds_the_same_tree(tmp_path: Path) -> None:
     py_trees = py_trees_or_skip()
     from py_trees.common import Status
 
-    problem, policy = solved("cubes/p4")
+    problem, policy = solved_v2("cubes/p4")
     pfile = tmp_path / "p4.json"
     policy.write(pfile)
     out = tmp_path / "p4_tree.py"
@@ -368,7 +368,7 @@ def test_py_trees_module_builds_the_same_tree(tmp_path: Path) -> None:
 def test_a_large_policy_with_hidden_intentions_keeps_its_shape_and_a_shallow_module() -> None:
     # the 8-cube problem's human reaches move(mt, ot) by several methods (to fetch one cube or
     # another): the robot sees one move, and the node after it holds several human agendas
-    problem, policy = solved(DATA / "cubes-8.toml")
+    problem, policy = solved_v2(DATA / "cubes-8.toml")
     assert any(len(n.human_agendas) > 1 for n in policy.nodes)
     assert all(len({m.action for m in n.moves}) == len(n.moves) for n in policy.nodes)
     bt.answers_of(problem, policy)  # walks every node along the policy's edges

@@ -17,6 +17,7 @@ import ehatp
 from ehatp.cli.app import app
 from ehatp.experiments import bench
 from ehatp.experiments.examples import example, examples_dir
+from ehatp.formats.lifted import expanded
 from ehatp.formats.policy import Policy
 
 from .conftest import TABLE1
@@ -187,7 +188,7 @@ def test_unknown_bench_instance_is_one_line() -> None:
 
 
 def test_show_prints_tree_and_timelines(p2_policy: Path) -> None:
-    pol = Policy.read(p2_policy)
+    pol = expanded(Policy.read(p2_policy))  # lifted (format version 3): shown expanded
     r = invoke("show", p2_policy)
     assert r.exit_code == 0, r.output
     out = r.stdout

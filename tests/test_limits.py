@@ -15,6 +15,7 @@ import pytest
 
 import ehatp
 from ehatp.experiments.bench import GridPoint
+from ehatp.formats.policy import Policy
 from ehatp.model.problem import parse_size
 from ehatp.search import andor, values
 from ehatp.search.limits import Budget, LimitReached
@@ -57,21 +58,28 @@ def test_timeout_stops_the_value_pass(monkeypatch: pytest.MonkeyPatch) -> None:
     assert r.stats["distinct"] > 1
 
 
-def test_timeout_stops_extraction(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_timeout_in_extraction_after_a_finished_search_keeps_the_proven_policy(
+        monkeypatch: pytest.MonkeyPatch) -> None:
     from ehatp.search import policy
 
     real = policy.bits_of
+    calls = [0]
 
     def slow_bits_of(m: int) -> list[int]:  # once per policy node: a slow extraction
-        time.sleep(0.2)
+        calls[0] += 1
+        if calls[0] <= 8:
+            time.sleep(0.2)
         return real(m)
 
     monkeypatch.setattr(policy, "bits_of", slow_bits_of)
     t0 = time.perf_counter()
     r = ehatp.solve(ehatp.load(CUBES / "p4.toml"), timeout=1.0)
     assert time.perf_counter() - t0 < 1.0 + 5
-    assert r.status == "timeout" and r.policy is None
-    assert "during extraction" in r.reason
+    # the search had proven the optimum: the policy is kept, and the cut phase named
+    assert r.status == "solved" and r.optimal and r.policy is not None and r.policy.optimal
+    assert "during extraction" in r.reason and "after the search had finished" in r.reason
+    again = ehatp.solve(ehatp.load(CUBES / "p4.toml")).policy
+    assert again is not None and r.policy.cost == again.cost
 
 
 def test_a_stopped_write_leaves_no_file(tmp_path: Path) -> None:
@@ -90,8 +98,8 @@ def test_a_stopped_write_leaves_no_file(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow  # sleeps 2.2 s past its time limit
-def test_cli_timeout_during_writing_writes_nothing(monkeypatch: pytest.MonkeyPatch,
-                                                   tmp_path: Path) -> None:
+def _solve_cli_timing_out_while_writing(monkeypatch: pytest.MonkeyPatch, target: Path,
+                                        *options: str) -> Any:
     from typer.testing import CliRunner
 
     from ehatp.cli import solve as solve_command
@@ -105,13 +113,31 @@ def test_cli_timeout_during_writing_writes_nothing(monkeypatch: pytest.MonkeyPat
         return out
 
     monkeypatch.setattr(solve_command, "solve", solve_then_wait)
+    return CliRunner().invoke(app, ["solve", str(CUBES / "p1.toml"), "--timeout", "1.5",
+                                    "--out", str(target), *options])
+
+
+def test_cli_timeout_during_writing_writes_nothing(monkeypatch: pytest.MonkeyPatch,
+                                                   tmp_path: Path) -> None:
     target = tmp_path / "p.json"
-    r = CliRunner().invoke(app, ["solve", str(CUBES / "p1.toml"), "--timeout", "1.5",
-                                     "--out", str(target)])
+    r = _solve_cli_timing_out_while_writing(monkeypatch, target, "--no-symmetry")
     assert r.exit_code == 1, r.output
     assert "time limit of 1.5 s" in r.stdout.splitlines()[0]
     assert "during writing" in r.stdout.splitlines()[0]
     assert not target.exists()
+
+
+def test_cli_timeout_during_writing_a_lifted_policy_writes_what_was_proven(
+        monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    # the search had finished and the lifted policy is small as the search: it is written
+    target = tmp_path / "p.json"
+    r = _solve_cli_timing_out_while_writing(monkeypatch, target)
+    assert r.exit_code == 0, r.output
+    first = r.stdout.splitlines()[0]
+    assert "solved (optimal policy found)" in first and "during writing" in first
+    assert "after the search had finished" in first
+    written = Policy.load(target)
+    assert written.optimal and written.symmetry is not None
 
 
 def test_a_stop_after_the_root_is_solved_keeps_the_best_policy(

@@ -21,7 +21,7 @@ from ehatp.cli.app import app
 from ehatp.cli.common import read_policy
 from ehatp.formats.policy import PolicyMove
 
-from .conftest import DATA, EXAMPLES, EXAMPLES_DIR, ROOT, Example, solved
+from .conftest import DATA, EXAMPLES, EXAMPLES_DIR, ROOT, Example, solved_v2
 from .policy_v1 import tree_dict
 
 V1 = DATA / "p4-v1.json"  # written by the version 1 writer (the tree, timelines included)
@@ -44,7 +44,7 @@ def invoke(*args: object) -> Any:
 # -- the format --------------------------------------------------------------------------------
 
 def test_a_policy_with_shared_nodes_round_trips_byte_identically(tmp_path: Path) -> None:
-    problem, policy = solved("cubes/p4")
+    problem, policy = solved_v2("cubes/p4")
     copies = policy.path_counts()
     assert max(copies) > 1  # some nodes are reached by several paths
     f = written(policy, tmp_path)
@@ -55,11 +55,11 @@ def test_a_policy_with_shared_nodes_round_trips_byte_identically(tmp_path: Path)
     # one line per node, and the same problem gives the same bytes
     assert sum(line.startswith('  {"copresent"') for line in text.splitlines()) == len(
         policy.nodes)
-    assert ehatp.solve(problem).policy.to_json() == text  # type: ignore[union-attr]
+    assert ehatp.solve(problem, expand=True).policy.to_json() == text  # type: ignore[union-attr]
 
 
 def test_nodes_are_states_and_moves_are_edges(tmp_path: Path) -> None:
-    _, policy = solved("cubes/p4")
+    _, policy = solved_v2("cubes/p4")
     data = json.loads(written(policy, tmp_path).read_text(encoding="utf-8"))
     assert data["version"] == 2 and "timelines" not in data
     for i, node in enumerate(data["nodes"]):
@@ -77,7 +77,7 @@ def test_nodes_are_states_and_moves_are_edges(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("example", EXAMPLES, ids=str)
 def test_counts_over_the_graph_equal_the_tree_unfolding(example: Example) -> None:
-    _, policy = solved(example)
+    _, policy = solved_v2(example)
     branches = policy.branches()
     assert len(branches) == policy.leaves == policy.count_branches()
     tree = tree_dict(policy)["nodes"]  # the version 1 tree, enumerated node by node
@@ -90,7 +90,7 @@ def test_counts_over_the_graph_equal_the_tree_unfolding(example: Example) -> Non
 
 @pytest.mark.parametrize("example", EXAMPLES, ids=str)
 def test_every_example_validates_from_its_file(example: Example, tmp_path: Path) -> None:
-    problem, policy = solved(example)
+    problem, policy = solved_v2(example)
     loaded = Policy.load(written(policy, tmp_path))
     read_policy(written(policy, tmp_path))  # its counts match its graph
     r = ehatp.validate(problem, loaded)
@@ -104,13 +104,13 @@ def test_every_example_validates_from_its_file(example: Example, tmp_path: Path)
 @pytest.mark.parametrize("problem", [*EXAMPLES, CUBES8], ids=lambda p: p.stem)
 def test_file_size_is_proportional_to_distinct_nodes(problem: Example | Path,
                                                      tmp_path: Path) -> None:
-    _, policy = solved(problem)
+    _, policy = solved_v2(problem)
     size = written(policy, tmp_path).stat().st_size
     assert size <= MAX_BYTES_PER_NODE * len(policy.nodes), (size, len(policy.nodes))
 
 
 def test_a_large_policy_is_a_small_graph(tmp_path: Path) -> None:
-    problem, policy = solved(CUBES8)
+    problem, policy = solved_v2(CUBES8)
     nodes, tree = len(policy.nodes), policy.tree_size()
     assert tree > 20 * nodes  # the tree unfolding repeats the shared states many times
     assert policy.leaves > nodes
@@ -135,13 +135,13 @@ def test_the_schema_accepts_every_shipped_examples_policy(tmp_path: Path) -> Non
     jsonschema.Draft202012Validator.check_schema(schema)
     check = jsonschema.Draft202012Validator(schema)
     for example in EXAMPLES:
-        _, policy = solved(example)
+        _, policy = solved_v2(example)
         data = json.loads(written(policy, tmp_path).read_text(encoding="utf-8"))
         errors = [f"{list(e.absolute_path)}: {e.message}" for e in check.iter_errors(data)]
         assert errors == [], (example.name, errors[:3])
     # and it is strict: a version 1 file, a move without its target, a stray field
     assert list(check.iter_errors(json.loads(V1.read_text(encoding="utf-8"))))
-    data = json.loads(written(solved(EXAMPLES[0]).policy, tmp_path).read_text(encoding="utf-8"))
+    data = json.loads(written(solved_v2(EXAMPLES[0]).policy, tmp_path).read_text(encoding="utf-8"))
     bad = copy.deepcopy(data)
     del bad["nodes"][0]["moves"][0]["to"]
     assert list(check.iter_errors(bad))
@@ -215,7 +215,7 @@ def _below_the_root(data: dict[str, Any]) -> None:
 
 
 def test_the_validator_rejects_a_shared_node_reached_in_two_states(tmp_path: Path) -> None:
-    problem, policy = solved("cubes/p4")
+    problem, policy = solved_v2("cubes/p4")
     (at, j), other = _same_facts_pair(policy)
     data = policy.to_dict()
     data["nodes"][at]["moves"][j]["to"] = other  # two paths, two states, one node
@@ -233,7 +233,7 @@ def test_the_validator_rejects_a_shared_node_reached_in_two_states(tmp_path: Pat
 
 
 def test_a_shared_node_is_checked_once(tmp_path: Path) -> None:
-    problem, policy = solved("cubes/p4")
+    problem, policy = solved_v2("cubes/p4")
     shared = max(range(len(policy.nodes)), key=lambda i: (policy.path_counts()[i], -i))
     data = policy.to_dict()
     data["nodes"][shared]["worlds"] += 5
@@ -252,7 +252,7 @@ def test_a_shared_node_is_checked_once(tmp_path: Path) -> None:
 
 
 def test_a_cycle_or_an_orphan_is_refused_when_read(tmp_path: Path) -> None:
-    _, policy = solved("cubes/p2")
+    _, policy = solved_v2("cubes/p2")
     data = policy.to_dict()
     leaf = next(n for n in data["nodes"] if not n["moves"])
     leaf["moves"].append({**PolicyMove("H", "pass", "pass", "pass", [], 1, 1).to_dict()})

@@ -20,7 +20,7 @@ from ehatp.cli.app import app
 from ehatp.formats import render as rd
 from ehatp.formats.policy import Policy, PolicyMove, PolicyNode
 
-from .conftest import CUBES_TABLE1, DATA, solved
+from .conftest import CUBES_TABLE1, DATA, solved_v2
 
 V1 = DATA / "p4-v1.json"  # written by format version 1
 NAMES = [e.stem for e in CUBES_TABLE1]  # p1 ... p6
@@ -34,7 +34,7 @@ def policy_files(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     files = {}
     for name in NAMES:
         path = out / f"{name}.json"
-        solved(f"cubes/{name}").policy.write(path)
+        solved_v2(f"cubes/{name}").policy.write(path)
         files[name] = path
     return files
 

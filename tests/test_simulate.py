@@ -14,7 +14,7 @@ from ehatp.cli.app import app as ehatp_app
 from ehatp.formats.policy import PathStep, Policy
 from ehatp.run.executor import ExecutionError, Executor, PolicyMismatch, UncoveredHumanAction
 
-from .conftest import EXAMPLES, EXAMPLES_DIR, Example, solved
+from .conftest import EXAMPLES, EXAMPLES_DIR, Example, solved_v2
 
 CUBES = EXAMPLES_DIR / "cubes"
 P2, QUAL, QUAL_ASK = CUBES / "p2.toml", CUBES / "qualitative.toml", CUBES / "qualitative-ask.toml"
@@ -47,7 +47,7 @@ def steps(output: str) -> list[tuple[str, str, str, int]]:
 
 def write_policy(tmp_path: Path, problem: Path) -> Path:
     path = tmp_path / f"{problem.stem}.json"
-    solved(problem).policy.write(path)
+    solved_v2(problem).policy.write(path)
     return path
 
 
@@ -62,7 +62,7 @@ def script_for(branch: list[PathStep], robot: str) -> str:
 # -- every branch of P2 ------------------------------------------------------------------------
 
 def test_every_p2_branch_reaches_the_goal_with_the_policy_world_counts(tmp_path: Path) -> None:
-    policy = solved(P2).policy
+    policy = solved_v2(P2).policy
     pfile = write_policy(tmp_path, P2)
     robot = policy.agents["robot"]
     branches = policy.branches()
@@ -108,7 +108,7 @@ def test_qualitative_trace_informs_that_box2_is_empty(tmp_path: Path) -> None:
 
 
 def test_qualitative_executor_worlds_after_the_opening() -> None:
-    ex = Executor(ehatp.load(QUAL), solved(QUAL).policy)
+    ex = Executor(ehatp.load(QUAL), solved_v2(QUAL).policy)
     while ex.in_opening:
         if ex.next_robot_action() is not None:
             ex.robot_action_done()
@@ -153,7 +153,7 @@ def test_qualitative_ask_trace_waits_for_the_question(tmp_path: Path) -> None:
 
 def test_uncovered_human_action_raises_with_the_expected_actions() -> None:
     # planned for a human who asks when blocked; this problem's human may also wait silently
-    ex = Executor(ehatp.load(QUAL), solved(QUAL_ASK).policy)
+    ex = Executor(ehatp.load(QUAL), solved_v2(QUAL_ASK).policy)
     while ex.in_opening:
         if ex.next_robot_action() is not None:
             ex.robot_action_done()
@@ -174,7 +174,7 @@ def test_uncovered_human_action_raises_with_the_expected_actions() -> None:
 
 
 def test_human_leaving_the_opening_or_the_model() -> None:
-    ex = Executor(ehatp.load(QUAL), solved(QUAL).policy)
+    ex = Executor(ehatp.load(QUAL), solved_v2(QUAL).policy)
     with pytest.raises(UncoveredHumanAction, match=r"H did pass, which the problem's "
                        r"fixed opening does not cover; the policy expects move\(mt, ot\)"):
         ex.observe_human_action("pass")
@@ -186,7 +186,7 @@ def test_human_leaving_the_opening_or_the_model() -> None:
 
 
 def test_policy_with_a_missing_branch(tmp_path: Path) -> None:
-    d = solved(P2).policy.to_dict()
+    d = solved_v2(P2).policy.to_dict()
     root = d["nodes"][0]
     dropped = root["moves"][0]["action"]
     root["moves"] = root["moves"][1:]
@@ -232,8 +232,8 @@ def test_script_expecting_another_robot_move_stops(tmp_path: Path) -> None:
 
 def test_policy_that_does_not_fit_the_problem(tmp_path: Path) -> None:
     with pytest.raises(PolicyMismatch, match="opening"):
-        Executor(ehatp.load(QUAL), solved(P2).policy)
-    d = solved(P2).policy.to_dict()
+        Executor(ehatp.load(QUAL), solved_v2(P2).policy)
+    d = solved_v2(P2).policy.to_dict()
     first = d["nodes"][0]["moves"][0]
     d["nodes"][first["to"]]["worlds"] = 7
     ex = Executor(ehatp.load(P2), Policy.from_dict(d))
@@ -322,7 +322,7 @@ def test_policy_for_another_problem_is_bad_input(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("example", EXAMPLES, ids=str)
 def test_executor_follows_every_branch_of_every_example(example: Example) -> None:
-    problem, policy = solved(example)  # every example has a policy
+    problem, policy = solved_v2(example)  # every example has a policy
     for branch in policy.branches():
         ex = Executor(problem, policy)
         while ex.in_opening:

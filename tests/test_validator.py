@@ -18,7 +18,7 @@ import ehatp
 from ehatp import Costs, Policy, Problem
 from ehatp.check.validator import Report, validate
 
-from .conftest import EXAMPLES, Example, solved
+from .conftest import EXAMPLES, Example, solved_v2
 from .policy_v1 import tree_dict
 
 Node = dict[str, Any]
@@ -56,7 +56,7 @@ def caught(problem: Problem, policy: Policy, *needles: str) -> Report:
 
 @pytest.mark.parametrize("example", EXAMPLES, ids=str)
 def test_planned_policies_validate(example: Example) -> None:
-    problem, policy = solved(example)
+    problem, policy = solved_v2(example)
     r = ehatp.validate(problem, policy)
     assert r.ok, "\n".join(r.violations)
     assert r.violations == []
@@ -67,12 +67,12 @@ def test_planned_policies_validate(example: Example) -> None:
 
 @pytest.mark.parametrize("name", ["cubes/p2", "cubes/qualitative"])
 def test_json_round_trip_validates(name: str) -> None:
-    problem, policy = solved(name)
+    problem, policy = solved_v2(name)
     assert validate(problem, Policy.from_dict(policy.to_dict())).ok
 
 
 def test_fractional_costs_validate_after_json() -> None:
-    problem, _ = solved("cubes/qualitative")
+    problem, _ = solved_v2("cubes/qualitative")
     p = dataclasses.replace(problem, costs=Costs(inform=Fraction("2.5"), wait=Fraction("0.5"),
                                                   actions={"place": Fraction("1.5")}))
     policy = ehatp.solve(p).policy
@@ -84,7 +84,7 @@ def test_fractional_costs_validate_after_json() -> None:
 # -- mutations, each caught with a precise message ------------------------------------------------
 
 def test_robot_action_not_applicable_in_T() -> None:
-    problem, policy = solved("cubes/p1")
+    problem, policy = solved_v2("cubes/p1")
 
     def edit(d: dict[str, Any]) -> None:
         n = node(d, agent="R", kind="action", action="pick(r)")
@@ -95,7 +95,7 @@ def test_robot_action_not_applicable_in_T() -> None:
 
 
 def test_robot_action_outside_the_agenda() -> None:
-    problem, policy = solved("sally-anne/inform")
+    problem, policy = solved_v2("sally-anne/inform")
 
     def edit(d: dict[str, Any]) -> None:
         # applicable in T, but the robot's agenda is already empty
@@ -108,7 +108,7 @@ def test_robot_action_outside_the_agenda() -> None:
 
 
 def test_human_branch_removed() -> None:
-    problem, policy = solved("cubes/p1")
+    problem, policy = solved_v2("cubes/p1")
 
     def edit(d: dict[str, Any]) -> None:
         d["nodes"][0]["children"].remove(node(d, agent="H", action="move(mt, ot)")["id"])
@@ -117,7 +117,7 @@ def test_human_branch_removed() -> None:
 
 
 def test_extra_human_branch() -> None:
-    problem, policy = solved("cubes/p1")
+    problem, policy = solved_v2("cubes/p1")
 
     def edit(d: dict[str, Any]) -> None:
         # the human stands at mt and w lies on ot: picking w is not one of its options
@@ -130,7 +130,7 @@ def test_extra_human_branch() -> None:
 
 
 def test_pass_right_after_a_robot_wait_is_not_a_human_option() -> None:
-    problem, policy = solved("cubes/p1")
+    problem, policy = solved_v2("cubes/p1")
 
     def edit(d: dict[str, Any]) -> None:
         # after the robot's wait the human can place w: it does not idle (section 4)
@@ -146,7 +146,7 @@ def test_pass_right_after_a_robot_wait_is_not_a_human_option() -> None:
 
 
 def test_leaf_that_is_not_a_goal() -> None:
-    problem, policy = solved("cubes/p1")
+    problem, policy = solved_v2("cubes/p1")
 
     def edit(d: dict[str, Any]) -> None:
         node(d, agent="H", action="move(ot, mt)")["children"] = []
@@ -158,7 +158,7 @@ def test_leaf_that_is_not_a_goal() -> None:
 
 
 def test_goal_with_children() -> None:
-    problem, policy = solved("cubes/p1")
+    problem, policy = solved_v2("cubes/p1")
 
     def edit(d: dict[str, Any]) -> None:
         leaf = node(d, goal=True)
@@ -168,7 +168,7 @@ def test_goal_with_children() -> None:
 
 
 def test_wrong_cost_on_a_node() -> None:
-    problem, policy = solved("cubes/p1")
+    problem, policy = solved_v2("cubes/p1")
 
     def edit(d: dict[str, Any]) -> None:
         node(d, agent="H", action="pick(w)")["cost"] = 7
@@ -180,9 +180,9 @@ def test_wrong_cost_on_a_node() -> None:
 
 
 def test_wrong_inform_cost() -> None:
-    problem, policy = solved("cubes/qualitative-ask")
+    problem, policy = solved_v2("cubes/qualitative-ask")
     assert validate(problem, policy).ok
-    p2, pol2 = solved("cubes/qualitative")
+    p2, pol2 = solved_v2("cubes/qualitative")
 
     def edit(d: dict[str, Any]) -> None:
         node(d, kind="inform")["cost"] = 10  # the problem's inform costs 1
@@ -191,7 +191,7 @@ def test_wrong_inform_cost() -> None:
 
 
 def test_wrong_value_on_a_node() -> None:
-    problem, policy = solved("cubes/p1")
+    problem, policy = solved_v2("cubes/p1")
 
     def edit(d: dict[str, Any]) -> None:
         node(d, agent="H", action="pass")["value"] = 3
@@ -202,7 +202,7 @@ def test_wrong_value_on_a_node() -> None:
 
 
 def test_wrong_policy_cost() -> None:
-    problem, policy = solved("cubes/p1")
+    problem, policy = solved_v2("cubes/p1")
 
     def edit(d: dict[str, Any]) -> None:
         d["cost"] = d["cost"] + 1
@@ -213,7 +213,7 @@ def test_wrong_policy_cost() -> None:
 
 
 def test_wrong_communications_and_leaves() -> None:
-    problem, policy = solved("cubes/qualitative")
+    problem, policy = solved_v2("cubes/qualitative")
 
     def edit(d: dict[str, Any]) -> None:
         d["communications"] = 0
@@ -224,7 +224,7 @@ def test_wrong_communications_and_leaves() -> None:
 
 
 def test_wrong_world_count() -> None:
-    problem, policy = solved("cubes/p1")
+    problem, policy = solved_v2("cubes/p1")
 
     def edit(d: dict[str, Any]) -> None:
         node(d, worlds=2)["worlds"] = 3
@@ -242,7 +242,7 @@ def test_wrong_world_count() -> None:
     ("to_move", "R", "to_move is 'R', expected 'H'"),
 ])
 def test_wrong_recorded_fact(field: str, value: Any, needle: str) -> None:
-    problem, policy = solved("cubes/p1")
+    problem, policy = solved_v2("cubes/p1")
 
     def edit(d: dict[str, Any]) -> None:
         node(d, agent="R", action="pick(r)", copresent=False)[field] = value
@@ -251,7 +251,7 @@ def test_wrong_recorded_fact(field: str, value: Any, needle: str) -> None:
 
 
 def test_inform_of_an_atom_the_human_already_believes() -> None:
-    problem, policy = solved("cubes/qualitative")
+    problem, policy = solved_v2("cubes/qualitative")
 
     def edit(d: dict[str, Any]) -> None:
         n = node(d, kind="inform")
@@ -262,7 +262,7 @@ def test_inform_of_an_atom_the_human_already_believes() -> None:
 
 
 def test_inform_of_more_atoms_than_needed() -> None:
-    problem, policy = solved("cubes/qualitative")
+    problem, policy = solved_v2("cubes/qualitative")
 
     def edit(d: dict[str, Any]) -> None:
         n = node(d, kind="inform")
@@ -272,7 +272,7 @@ def test_inform_of_more_atoms_than_needed() -> None:
 
 
 def test_inform_while_apart() -> None:
-    problem, policy = solved("cubes/p2")
+    problem, policy = solved_v2("cubes/p2")
 
     def edit(d: dict[str, Any]) -> None:
         n = node(d, agent="R", action="wait", copresent=False)
@@ -283,7 +283,7 @@ def test_inform_while_apart() -> None:
 
 
 def test_human_acting_on_a_false_belief() -> None:
-    problem, policy = solved("sally-anne/inform")
+    problem, policy = solved_v2("sally-anne/inform")
 
     def edit(d: dict[str, Any]) -> None:
         # the robot waits instead of informing: the human, sure the ball is in the basket,
@@ -304,7 +304,7 @@ def test_human_acting_on_a_false_belief() -> None:
 
 
 def test_robot_node_with_two_children() -> None:
-    problem, policy = solved("cubes/p1")
+    problem, policy = solved_v2("cubes/p1")
 
     def edit(d: dict[str, Any]) -> None:
         n = node(d, agent="H", action="move(mt, ot)")
@@ -315,7 +315,7 @@ def test_robot_node_with_two_children() -> None:
 
 
 def test_tampered_opening() -> None:
-    problem, policy = solved("cubes/qualitative")
+    problem, policy = solved_v2("cubes/qualitative")
 
     def edit(d: dict[str, Any]) -> None:
         d["after"][1] = "R wait"
@@ -328,7 +328,7 @@ def test_tampered_opening() -> None:
 
 
 def test_opening_tampered_into_another_legal_line() -> None:
-    problem, policy = solved("cubes/qualitative")
+    problem, policy = solved_v2("cubes/qualitative")
 
     def edit(d: dict[str, Any]) -> None:
         d["after"][3] = "R place(r, box2)"
@@ -340,7 +340,7 @@ def test_opening_tampered_into_another_legal_line() -> None:
 
 
 def test_illegal_opening_move() -> None:
-    problem, policy = solved("cubes/qualitative")
+    problem, policy = solved_v2("cubes/qualitative")
 
     def edit(d: dict[str, Any]) -> None:
         d["after"][2] = "H pick(r)"  # the human is at ot; r lies on mt
@@ -351,7 +351,7 @@ def test_illegal_opening_move() -> None:
 
 
 def test_opening_matching_a_tampered_problem_is_checked_too() -> None:
-    problem, policy = solved("cubes/qualitative")
+    problem, policy = solved_v2("cubes/qualitative")
     bad = [*problem.after]
     bad[1] = "R place(r, box1)"  # the robot does not hold r yet
     p = dataclasses.replace(problem, after=tuple(bad))
@@ -361,7 +361,7 @@ def test_opening_matching_a_tampered_problem_is_checked_too() -> None:
 
 
 def test_other_branches_are_still_checked() -> None:
-    problem, policy = solved("cubes/p1")
+    problem, policy = solved_v2("cubes/p1")
 
     def edit(d: dict[str, Any]) -> None:
         node(d, agent="H", action="pick(w)")["cost"] = 7  # in the first branch
@@ -376,7 +376,7 @@ def test_other_branches_are_still_checked() -> None:
 
 
 def test_inform_label_with_the_wrong_value() -> None:
-    problem, policy = solved("cubes/qualitative")
+    problem, policy = solved_v2("cubes/qualitative")
 
     def edit(d: dict[str, Any]) -> None:
         node(d, kind="inform")["action"] = "inform(not empty(box2))"

@@ -123,6 +123,10 @@ def solve_cmd(
         "--no-symmetry", help="Search every state, not one per renaming of interchangeable "
                               "objects (default: the problem's limits.symmetry, else on; "
                               "docs/semantics.md §3).")] = False,
+    expand: Annotated[bool, typer.Option(
+        "--expand", help="Write the policy over the real objects (format version 2) even when "
+                         "the search ran over canonical states, where the lifted policy "
+                         "(version 3) is written by default (docs/policy-format.md).")] = False,
 ) -> None:
     """Plan a robot policy, optimal under the problem's objective, and write it as JSON.
 
@@ -151,7 +155,8 @@ def solve_cmd(
     try:
         with user_errors(problem):
             result = solve(prob, max_states=max_states, max_depth=max_depth, progress=live,
-                           budget=budget, symmetry=False if no_symmetry else None)
+                           budget=budget, symmetry=False if no_symmetry else None,
+                           expand=expand)
         result, written = _write(result, target, budget)
     finally:
         if live is not None:
@@ -162,9 +167,11 @@ def solve_cmd(
 
 
 def _write(result: Result, target: Path, budget: Budget) -> tuple[Result, bool]:
-    """Write the policy found, if any, to ``target`` under the limits; return the result (a
-    limit reached while writing stops the work as it would the search) and whether the file
-    was written."""
+    """Write the policy found, if any, to ``target`` under the limits; return the result and
+    whether the file was written. A limit reached while writing stops the work as it would the
+    search, except after a finished search: then what it proved is written past the limit,
+    the lifted policy (format version 3, small as the search) when there is one, and the
+    result says which phase was cut."""
     from ..search.limits import LimitReached
 
     if result.policy is None:
@@ -177,6 +184,21 @@ def _write(result: Result, target: Path, budget: Budget) -> tuple[Result, bool]:
         die(f"{target}: cannot write the policy ({e.strerror or e}); choose another --out")
     except (LimitReached, MemoryError) as e:
         stop = e if isinstance(e, LimitReached) else budget.out_of_memory()
+        kept = result.lifted if result.lifted is not None else result.policy
+        if result.status == SolveStatus.SOLVED and kept.symmetry is not None:
+            try:
+                kept.write(target)
+            except OSError as err:
+                die(f"{target}: cannot write the policy ({err.strerror or err}); choose "
+                    "another --out")
+            except MemoryError:
+                pass
+            else:
+                what = ("the lifted policy (format version 3) is written instead"
+                        if kept is not result.policy else "it was written past the limit")
+                return dataclasses.replace(
+                    result, policy=kept, lifted=None,
+                    reason=f"{stop.reason}, after the search had finished: {what}"), True
         return dataclasses.replace(result, status=stop.status, policy=None, reason=stop.reason,
                                    optimal=False), False
     return result, True
@@ -184,7 +206,10 @@ def _write(result: Result, target: Path, budget: Budget) -> tuple[Result, bool]:
 
 def _summary(prob: Problem, result: Result, wall_ms: float, written: Path | None) -> None:
     st = result.stats
-    if result.status == SolveStatus.SOLVED and result.optimal:
+    if result.status == SolveStatus.SOLVED and result.optimal and result.reason:
+        typer.secho(f"{prob.name}: solved (optimal policy found); {result.reason}",
+                    fg="yellow", bold=True)
+    elif result.status == SolveStatus.SOLVED and result.optimal:
         typer.secho(f"{prob.name}: solved (optimal policy found)", fg="green", bold=True)
     elif result.status == SolveStatus.SOLVED:
         typer.secho(f"{prob.name}: solved, {result.reason}", fg="yellow", bold=True)
@@ -209,6 +234,9 @@ def _summary(prob: Problem, result: Result, wall_ms: float, written: Path | None
         solved = result.status == SolveStatus.SOLVED
         note = ("" if result.optimal else " (NOT proven optimal)" if solved
                 else " (best found so far, NOT proven optimal)")
+        if pol is not None and pol.symmetry is not None:
+            note += (f", lifted: {len(pol.nodes):,} canonical nodes (format version 3; "
+                     "--expand writes version 2)")
         rows.append(("policy", f"written to {written}{note}"))
     elif result.status != SolveStatus.UNSOLVABLE:
         rows.append(("policy", "none found before the work stopped"))

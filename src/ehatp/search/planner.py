@@ -32,6 +32,9 @@ class Result:
     stats: SolveStats = field(default_factory=lambda: SolveStats())
     reason: str = ""
     optimal: bool = False
+    # the lifted policy (format version 3) when ``policy`` is its expansion (``expand``): what
+    # a writer stopped by a limit can still write, small as the search
+    lifted: Policy | None = None
 
     @property
     def solved(self) -> bool:
@@ -47,12 +50,14 @@ class _Settings:
     max_depth: int | None
     symmetry: bool
     heuristic: bool | None
+    expand: bool = False
 
 
 def solve(problem: Problem, *, timeout: float | None = None, max_states: int | None = None,
           max_depth: int | None = None, progress: Progress | None = None,
           max_memory: int | None = None, budget: Budget | None = None,
-          symmetry: bool | None = None, heuristic: bool | None = None) -> Result:
+          symmetry: bool | None = None, heuristic: bool | None = None,
+          expand: bool = False) -> Result:
     """Plan a robot policy for ``problem``, optimal under ``problem.objective``
     (docs/semantics.md §7: worst-case by default, or expected cost).
 
@@ -64,16 +69,19 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
     False); ``reason`` says which limit. ``progress(stats, frontier)`` is called about 20 times
     a second, ``stats.phase`` naming the work under way.
 
-    ``symmetry`` (default: ``[limits] symmetry``) searches over canonical states, the policy
-    mapped back to the real objects (docs/semantics.md §3, "Symmetry"); when the reduction
-    cannot be trusted for this problem (a decision taken by name or index order, or a move
-    that does not map back) the problem is solved again without it. ``heuristic`` (default:
+    ``symmetry`` (default: ``[limits] symmetry``) searches over canonical states
+    (docs/semantics.md §3, "Symmetry"); the policy is then *lifted* (format version 3: its
+    nodes are the canonical states, its moves carry renamings; docs/policy-format.md), or with
+    ``expand`` mapped back to the real objects (version 2, every real move checked against the
+    real semantics). When the reduction cannot be trusted for this problem (a decision taken
+    by name or index order, or, expanding, a move that does not map back) the problem is solved
+    again without it. ``heuristic`` (default:
     on) orders a worst-case search by a lower bound (:mod:`.heuristic`): fewer states, the
     same policy.
 
-    The steps: ground (:func:`_ground`), search (:func:`_search`), map the chosen policy back
-    to the real objects and extract it (:func:`_extract`), then say why there is no policy or
-    why it is not proven optimal (:func:`_reason`).
+    The steps: ground (:func:`_ground`), search (:func:`_search`), extract the chosen policy
+    (:func:`_extract`), then say why there is no policy or why it is not proven optimal
+    (:func:`_reason`).
     """
     live = Stats()
     budget = start_budget(problem.limits, live, timeout=timeout, max_memory=max_memory,
@@ -82,27 +90,52 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
     if isinstance(grounded, Result):
         return grounded
     settings = _Settings(max_states, max_depth, _symmetry.enabled(symmetry, problem.limits),
-                         heuristic)
+                         heuristic, expand)
     out = _search(grounded, budget, live, settings)
     stats = out.stats.as_dict()
     stats["atoms"] = len(grounded.atoms)
     status, reason, optimal = out.status, out.reason, out.optimal
-    policy = None
+    policy = lifted = None
     if out.values is not None and out.values.value[out.root] != INF:
         public = {k: v for k, v in stats.items() if k != "time_ms"}
-        got = _extract(problem, out, public, budget)
+        if expand and out.graph.sym is not None and out.status == SolveStatus.SOLVED:
+            lifted = _proven(problem, out, public)  # kept in case expanding is cut
+        got = _extract(problem, out, public, budget, expand)
         if isinstance(got, str):  # not expected: solve without symmetry
             live.restart()
             return solve(problem, max_states=max_states, max_depth=max_depth, budget=budget,
-                         symmetry=False, heuristic=heuristic)
-        if isinstance(got, LimitReached):
+                         symmetry=False, heuristic=heuristic, expand=expand)
+        if isinstance(got, LimitReached) and out.status == SolveStatus.SOLVED:
+            # §7: the search is finished: what it proved is kept, whatever stopped the rest
+            policy = lifted if lifted is not None else _proven(problem, out, public)
+            if policy is not None:
+                what = ("the lifted policy (format version 3) is returned instead"
+                        if lifted is not None else "the policy was extracted past the limit")
+                reason = f"{got.reason}, after the search had finished: {what}"
+                lifted = None
+            else:
+                status, reason, optimal = got.status, got.reason, False
+        elif isinstance(got, LimitReached):
             status, reason, optimal = got.status, got.reason, False
         else:
             policy = got
+        if policy is not None:
             _policy_stats(stats, policy)
     reason = _reason(problem, grounded, out, status, reason, optimal, budget, settings)
     budget.phase = "done"
-    return Result(status, policy, stats, reason, optimal)
+    return Result(status, policy, stats, reason, optimal, lifted)
+
+
+def _proven(problem: Problem, out: SearchOutcome, public: dict[str, Any]) -> Policy | None:
+    """The policy a finished search chose, extracted without the limits (lifted over canonical
+    states: linear in the canonical nodes the policy reaches, which the search already holds);
+    None when even that runs out of memory."""
+    assert out.values is not None
+    try:
+        return extract(out.graph, out.root, out.values, problem_name=problem.name,
+                       optimal=out.optimal, stats=public)
+    except MemoryError:
+        return None
 
 
 def _ground(problem: Problem, budget: Budget, live: Stats) -> Grounded | Result:
@@ -136,18 +169,20 @@ def _search(grounded: Grounded, budget: Budget, live: Stats,
 
 
 def _extract(problem: Problem, out: SearchOutcome, public: dict[str, Any],
-             budget: Budget) -> Policy | LimitReached | str:
-    """Return the policy the values chose, on the real objects (docs/policy-format.md,
-    ``public`` its statistics); the limit that stopped extraction; or, over canonical states,
-    why the chosen policy could not be mapped back (then the caller solves without
-    symmetry)."""
+             budget: Budget, expand: bool = False) -> Policy | LimitReached | str:
+    """Return the policy the values chose (docs/policy-format.md, ``public`` its statistics):
+    over canonical states the lifted policy, or with ``expand`` the policy on the real objects;
+    the limit that stopped extraction; or, expanding, why the chosen policy could not be mapped
+    back (then the caller solves without symmetry)."""
     budget.phase = "extraction"
     try:
         budget.check()
         graph, root, values = out.graph, out.root, out.values
         assert values is not None
-        if graph.sym is not None:
+        if graph.sym is not None and expand:
+            budget.phase = "expansion"
             real = realise(graph, root, values, check=budget.check)
+            budget.phase = "extraction"
             if isinstance(real, str):
                 return real
             graph, root, values = real
@@ -198,7 +233,7 @@ def _hidden_choice(problem: Problem, budget: Budget, settings: _Settings) -> str
     seen = replace(problem, human=replace(problem.human, intentions=Intentions.VISIBLE))
     try:
         other = solve(seen, max_states=settings.max_states, max_depth=settings.max_depth,
-                      budget=budget, heuristic=settings.heuristic)
+                      budget=budget, heuristic=settings.heuristic, expand=True)
     except LimitReached:
         return ""
     if other.policy is None:

@@ -4,6 +4,7 @@ file format lives in :mod:`ehatp.policy_format`), and why no policy exists when 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 from ..epistemic.semantics import ACTION, WAIT, Move, bits_of
@@ -28,7 +29,14 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
     node's ``value`` and the policy's ``cost`` are the objective's. Branches and communications
     are counted over the graph too (:meth:`Policy.count_branches`). ``check`` (e.g. a time
     limit's, docs/semantics.md §7 "Search") is called once per policy node and may raise to
-    stop the work."""
+    stop the work.
+
+    Over canonical states (``gr.sym``, docs/semantics.md §3 "Symmetry") the policy is
+    *lifted* (format version 3): its nodes are the canonical nodes the policy reaches, each
+    move carries the renaming from its child, seen from its node, to the child node (the
+    search's :attr:`Edge.perm`), and ``symmetry`` holds the table of renamings, numbered in
+    order of first use (0 the identity, then the root's). Costs and counts are those of the
+    real policy: a renaming keeps them."""
     if check is None:
         check = _no_check
 
@@ -40,11 +48,41 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
 
     order = _preorder(root, chosen, check)
     index = {n: i for i, n in enumerate(order)}
+    table = _Table(gr) if gr.sym is not None else None
     nodes: list[PolicyNode] = []
     for i, n in enumerate(order):
         check()
-        nodes.append(_policy_node(gr, i, n, [_policy_move(gr, e, index) for e in chosen(n)]))
-    return _policy(gr.sem.grounded.problem, problem_name, nodes, optimal, stats or {})
+        nodes.append(_policy_node(gr, i, n, [_policy_move(gr, e, index, table)
+                                             for e in chosen(n)]))
+    policy = _policy(gr.sem.grounded.problem, problem_name, nodes, optimal, stats or {})
+    if table is not None:
+        policy.symmetry = table.as_dict()
+    return policy
+
+
+class _Table:
+    """The renamings a lifted policy uses, numbered in order of first use: 0 the identity,
+    then the root's (the search's ``root_perm``), then the edges' in node and move order."""
+
+    def __init__(self, gr: Graph) -> None:
+        sym = gr.sym
+        assert sym is not None
+        self.sym = sym
+        self.ids: dict[int, int] = {0: 0}
+        self.root = self.local(gr.root_perm)
+
+    def local(self, pid: int) -> int:
+        """The file's index of the search's renaming ``pid``."""
+        i = self.ids.get(pid)
+        if i is None:
+            i = self.ids[pid] = len(self.ids)
+        return i
+
+    def as_dict(self) -> dict[str, Any]:
+        sym = self.sym
+        return {"objects": list(sym.objects),
+                "classes": [[sym.objects[i] for i in cls] for cls in sym.classes],
+                "renamings": [list(sym.perms[pid]) for pid in self.ids], "root": self.root}
 
 
 def _no_check() -> None:
@@ -70,12 +108,20 @@ def _preorder(root: int, chosen: Callable[[int], list[Edge]],
     return order
 
 
-def _policy_move(gr: Graph, e: Edge, index: dict[int, int]) -> PolicyMove:
+def _policy_move(gr: Graph, e: Edge, index: dict[int, int],
+                 table: _Table | None = None) -> PolicyMove:
     """Return the edge ``e`` as a policy move (docs/policy-format.md): the agent's name, the
     move's kind, label, name and arguments, cost, the policy node it leads to (``index``: by
-    search node) and what was said with it (§5, as it is after the move)."""
+    search node) and what was said with it (§5, as it is after the move). In a lifted policy
+    (``table``) the move is in its node's names, what was said read in the child as seen from
+    there, and it carries the renaming to the child node."""
     sem = gr.sem
     move: Move = e.move
+    renaming = 0
+    if table is not None and e.perm:
+        renaming = table.local(e.perm)
+        if move.child is not None:  # the descriptor holds the child node's state: see it
+            move = replace(move, child=table.sym.apply(table.sym.inverse(e.perm), move.child))
     name, call_args, label = sem.describe(move)
     told: list[str] = []
     if move.kind in (ACTION, WAIT) and move.atoms:  # said with a move (§5): as it is after
@@ -83,7 +129,7 @@ def _policy_move(gr: Graph, e: Edge, index: dict[int, int]) -> PolicyMove:
         told = list(sem.literals(move.child.true, move.atoms))
     return PolicyMove(agent=sem.names[move.agent], kind=str(move.kind), action=label,
                       name=str(name), args=list(call_args), cost=move.cost, to=index[e.child],
-                      told=told)
+                      told=told, renaming=renaming)
 
 
 def _policy_node(gr: Graph, i: int, n: int, moves: list[PolicyMove]) -> PolicyNode:
