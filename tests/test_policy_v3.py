@@ -298,3 +298,22 @@ def test_a_limit_in_writing_an_expansion_writes_the_lifted_policy(
     assert written and out.status == SolveStatus.SOLVED and out.optimal
     assert "after the search had finished" in out.reason
     assert Policy.load(tmp_path / "p.json").version == 3
+
+
+def test_the_schema_accepts_every_examples_v3_policy_and_wants_its_table() -> None:
+    jsonschema = pytest.importorskip("jsonschema")
+    schema = json.loads((ROOT / "docs" / "policy.schema.json").read_text(encoding="utf-8"))
+    check = jsonschema.Draft202012Validator(schema)
+    lifted = 0
+    for example in EXAMPLES:
+        policy = solve(ehatp.load(example.path)).policy
+        assert policy is not None
+        data = json.loads(policy.to_json())
+        errors = [f"{list(e.absolute_path)}: {e.message}" for e in check.iter_errors(data)]
+        assert errors == [], (example.name, errors[:3])
+        if data["version"] == 3:
+            lifted += 1
+            bad = dict(data)
+            del bad["symmetry"]
+            assert list(check.iter_errors(bad))
+    assert lifted
