@@ -62,6 +62,14 @@ def test_the_large_points_are_opt_in() -> None:
         bench.scaling_grid()) + 44
 
 
+def test_the_largest_point_is_a_problem(tmp_path: Path) -> None:
+    p = next(x for x in bench.big_points() if x.name == "cubes-c30-b4-opaque-k8")
+    f = tmp_path / "big.toml"
+    f.write_text(p.toml(), encoding="utf-8")
+    prob = ehatp.load(f)
+    assert prob.K == 8 and len(prob.objects["cube"]) == 30 and len(prob.objects["box"]) == 4
+
+
 def test_phase_shares_add_up_by_phase() -> None:
     phases = {"before grounding": 0.01, "grounding": 0.09, "search": 0.5,
               "search (first worst-case pass)": 0.1, "values (worst case)": 0.05,
