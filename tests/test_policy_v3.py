@@ -13,13 +13,16 @@ import pytest
 from typer.testing import CliRunner
 
 import ehatp
+from ehatp import HIDDEN, Domain, HumanModel, Var
 from ehatp.cli.app import app
 from ehatp.errors import InputError
 from ehatp.experiments.bench import GridPoint
 from ehatp.formats.lifted import Renamings, expand
 from ehatp.formats.policy import Policy
 from ehatp.formats.problem_toml import loads
+from ehatp.model.formula import exists
 from ehatp.model.grounding import ground_problem
+from ehatp.model.options import Passes
 from ehatp.model.problem import Problem
 from ehatp.run.executor import Executor
 from ehatp.run.expand import expand_policy
@@ -30,6 +33,7 @@ from ehatp.search.planner import solve
 from ehatp.search.symmetry import detect
 
 from .conftest import DATA, EXAMPLES, ROOT, Example
+from .scenarios import problem as scenario
 
 P4 = ROOT / "examples" / "cubes" / "p4.toml"
 
@@ -317,3 +321,40 @@ def test_the_schema_accepts_every_examples_v3_policy_and_wants_its_table() -> No
             del bad["symmetry"]
             assert list(check.iter_errors(bad))
     assert lifted
+
+
+def spare_parts() -> Problem:
+    """Three spare parts, all available; the human takes one (any), then fetches one, which
+    needs an available part it has not taken, but believes none is available. The robot tells
+    it one: the two parts left tie on everything but names (§5)."""
+    d = Domain("spare-parts")
+    item = d.type("item")
+    i = Var("i", item)
+    avail = d.predicate("avail", i, observability=HIDDEN)
+    taken = d.predicate("taken", i)
+    fetched = d.predicate("fetched")
+    h = d.human
+    take = h.action("take", i, pre=~taken(i), effects=[taken(i)])
+    one = h.task("take_one")
+    h.method(one, "any", params=[i], pre=~taken(i), subtasks=[take(i)])
+    fetch = h.action("fetch", pre=exists(i, avail(i) & ~taken(i)), effects=[fetched()])
+    get = h.task("get", done=fetched())
+    h.method(get, "fetch", subtasks=[fetch()])
+    parts = ["avail(a)", "avail(b)", "avail(c)"]
+    return scenario(d, init=parts, human=["take_one", "get"],
+                    objects={"item": ["a", "b", "c"]},
+                    human_model=HumanModel(passes=Passes.IDLE), beliefs=[([], parts)])
+
+
+def test_an_inform_chosen_by_name_at_a_renamed_node_is_written_over_the_real_objects(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # §3, §5: after take(a) the node stands for a renamed state, where the real rules choose
+    # among the parts left by their real names; only the mapping back follows them
+    p = spare_parts()
+    policy = solve(p).policy
+    assert policy is not None and policy.version == 2 and ehatp.validate(p, policy).ok
+    assert policy.to_json() == solve(p, expand=True).policy.to_json()  # type: ignore[union-attr]
+    monkeypatch.setattr(planner, "liftable", lambda *args: True)
+    forced = solve(p).policy
+    assert forced is not None and forced.version == 3
+    assert not ehatp.validate(p, forced).ok  # what the check keeps from being written

@@ -14,7 +14,7 @@ from . import symmetry as _symmetry
 from .andor import SearchOutcome, search
 from .diagnose import diagnose
 from .limits import LIMITS, Budget, LimitReached, SolveStatus, start_budget
-from .policy import explain_failure, extract, realise
+from .policy import explain_failure, extract, liftable, realise
 from .stats import Progress, SolveStats, Stats
 
 INF = float("inf")
@@ -179,6 +179,8 @@ def _extract(problem: Problem, out: SearchOutcome, public: dict[str, Any],
         budget.check()
         graph, root, values = out.graph, out.root, out.values
         assert values is not None
+        if graph.sym is not None and not expand and not liftable(graph, root, values):
+            expand = True  # an inform chosen by name: only the real objects can say it (§3)
         if graph.sym is not None and expand:
             budget.phase = "expansion"
             real = realise(graph, root, values, check=budget.check)

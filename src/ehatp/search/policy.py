@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import replace
+from itertools import combinations
 from typing import Any
 
 from ..epistemic.semantics import ACTION, WAIT, Move, bits_of
@@ -186,6 +187,83 @@ def _policy(p: Problem, problem_name: str, nodes: list[PolicyNode], optimal: boo
     return policy
 
 
+def liftable(gr: Graph, root: int, values: Values) -> bool:
+    """Whether the chosen policy of a search over canonical states can be written lifted
+    (docs/policy-format.md, "Version 3"): no robot move it plays, at a node that stands for a
+    *renamed* real state, says an informing set chosen by name among sets as good on
+    everything else (§5), one of them naming an interchangeable object. There the real rules
+    choose by the real names, maybe another set (docs/semantics.md §3), which only the mapping
+    back to the real objects (:func:`realise`) follows; the planner then writes the policy
+    over the real objects. The renamings a node stands for are composed along the policy's
+    paths from the real root, two kept per node (one of two distinct ones moves something)."""
+    sym = gr.sym
+    assert sym is not None
+    taus: dict[int, set[int]] = {root: {sym.inverse(gr.root_perm)}}
+    stack = [root]
+    while stack:
+        n = stack.pop()
+        if gr.status[n] == GOAL:
+            continue
+        edges = gr.edges[n]
+        chosen = [edges[values.choice[n]]] if gr.is_robot(n) else list(edges)
+        for e in chosen:
+            if gr.is_robot(n) and e.move.atoms and any(taus[n]) \
+                    and _named_tie(gr.sem, gr.states[n], e.move.atoms):
+                return False
+            mine = taus.setdefault(e.child, set())
+            grew = False
+            for tau in taus[n]:
+                if len(mine) >= 2:
+                    break
+                child = sym.compose(tau, sym.inverse(e.perm))
+                if child not in mine:
+                    mine.add(child)
+                    grew = True
+            if grew:
+                stack.append(e.child)
+    return True
+
+
+def _named_tie(sem: Any, es: EState, mask: int) -> bool:
+    """Whether ``mask``, an informing set the rules chose at ``es`` (§5), ties with another
+    set of its size on everything but names, one of the two naming an interchangeable
+    object (the ranking of :meth:`~.symmetry.SymSemantics.informing_set`'s watch)."""
+    sym = getattr(sem, "sym", None)
+    if sym is None:
+        return False
+    grounded, t = sem.grounded, es.true
+    watch = getattr(sem, "watch", None)
+    sem.watch = False
+    try:
+        plans = [plan for plan in (False, True) if sem.informing_set(es, plan) == mask]
+        if not plans:
+            return False
+        div = 0
+        for s, _ in es.worlds:
+            div |= s ^ t
+        size = len(grounded.units(mask))
+
+        def rank(m: int, combo: Any) -> tuple[int, int]:
+            w2 = sem.observe(t, es.worlds, m)
+            return len(w2), -sum(1 for u in combo if t & u or u in grounded.unit_names)
+
+        best = rank(mask, grounded.units(mask))
+        for plan in plans:
+            want_r = sem.fixes(es, sem.observe(t, es.worlds, mask), True, plan)
+            for combo in combinations(grounded.units(div), size):
+                other = 0
+                for u in combo:
+                    other |= u
+                if other == mask or not (other | mask) & sym.movable_mask:
+                    continue
+                if sem.fixes(es, sem.observe(t, es.worlds, other), want_r, plan) \
+                        and rank(other, combo) == best:
+                    return True
+        return False
+    finally:
+        sem.watch = watch
+
+
 def realise(gr: Graph, root: int, values: Values,
             check: Callable[[], None] | None = None) -> tuple[Graph, int, Values] | str:
     """The chosen policy of a search over canonical states (docs/semantics.md §3,
@@ -365,4 +443,4 @@ def _why(path: list[str], reason: str) -> str:
     return (f"after {more}{steps}: {reason}" if path else reason)
 
 
-__all__ = ["explain_failure", "extract", "graph_costs", "realise"]
+__all__ = ["explain_failure", "extract", "graph_costs", "liftable", "realise"]
