@@ -83,6 +83,7 @@ def test_phase_shares_add_up_by_phase() -> None:
     other = bench.phase_shares({"search": 1.0, "lifting": 1.0})
     assert other is not None and bench.format_shares(other) == "0/50/0/0/0 +lifting 50"
     assert bench.phase_shares(None) is None and bench.format_shares(None) == "-"
+    assert bench.phase_group("expansion") == "extraction"
 
 
 @pytest.mark.parametrize("name", ["cubes-c3-b2-opaque-k6", "cubes-c3-b2-transparent-k8",

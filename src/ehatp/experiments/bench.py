@@ -405,12 +405,14 @@ PHASES = ("grounding", "search", "values", "extraction", "writing")
 
 def phase_group(name: str) -> str:
     """The phase of :data:`PHASES` a budget's phase name belongs to: "search (first
-    worst-case pass)" is the search's, "values (choices)" the values', the time between
-    ``solve()`` being called and grounding starting is grounding's; anything else (a phase
-    added later) is its own."""
+    worst-case pass)" is the search's, "values (choices)" the values', "expansion" (a lifted
+    policy mapped back onto the real objects) extraction's, the time between ``solve()`` being
+    called and grounding starting is grounding's; anything else (a phase added later) is its
+    own."""
     for group, prefixes in (("grounding", ("ground", "before grounding")),
                             ("search", ("search",)), ("values", ("values",)),
-                            ("extraction", ("extract", "realis")), ("writing", ("writ",))):
+                            ("extraction", ("extract", "realis", "expan")),
+                            ("writing", ("writ",))):
         if name.startswith(prefixes):
             return group
     return name
