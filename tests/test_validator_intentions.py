@@ -27,7 +27,7 @@ from ehatp.formats.policy import FORMAT
 from ehatp.model.options import Intentions
 
 from .scenarios import lab_domain, problem
-from .test_validator_options import caught, ok, split_top
+from .test_validator_options import call, caught, ok
 
 Cost = int
 Diffs = list[tuple[list[str], list[str]]]
@@ -53,25 +53,6 @@ class S:
     cop: bool = True
     k: int = 0
     moves: list[tuple[str, str, Cost, S]] = field(default_factory=list)
-
-
-def call(label: str) -> tuple[str, str, list[str], list[str]]:
-    """(kind, name, args, told) of a move label as a policy file writes them."""
-    if label.startswith("inform(") and " + " in label:
-        said, _, act = label.partition(" + ")
-        kind, name, args, _ = call(act)
-        return kind, name, args, split_top(said[len("inform("):-1])
-    if label.startswith("inform("):
-        return "inform", "inform", split_top(label[len("inform("):-1]), []
-    if label.startswith("ask("):
-        return "ask", "ask", [label[len("ask("):-1]], []
-    for kind in ("answer", "announce"):
-        if label.startswith(kind + "("):
-            return kind, kind, [], []
-    if label in ("wait", "pass", "silence"):
-        return label, label, [], []
-    name, _, rest = label.partition(" [")[0].partition("(")
-    return "action", name, split_top(rest[:-1]), []
 
 
 def build(p: Problem, root: S) -> Policy:

@@ -78,9 +78,12 @@ def call(label: str) -> tuple[str, str, list[str], list[str]]:
         return "inform", "inform", split_top(label[len("inform("):-1]), []
     if label.startswith("ask("):
         return "ask", "ask", [label[len("ask("):-1]], []
+    for kind in ("answer", "announce"):
+        if label.startswith(kind + "("):
+            return kind, kind, [], []
     if label in ("wait", "pass", "silence", "start"):
         return label, label, [], []
-    name, _, rest = label.partition("(")
+    name, _, rest = label.partition(" [")[0].partition("(")  # "grab [place(l)]": visible
     return "action", name, split_top(rest[:-1]), []
 
 
