@@ -92,6 +92,29 @@ def bench_table1(
 
 
 @app.command("scaling")
+def _run_points(points: list[Any], timeout: float, memory: int, repeat: int,
+                symmetry: bool | None) -> list[dict[str, Any]]:
+    """Return the scaling rows of ``points``, each solved in a process of its own, with a
+    status line on the terminal saying which one is running."""
+    from ..experiments import bench as bench_mod
+
+    console = stderr_console()
+    status = console.status("") if console is not None else None
+
+    def notify(p: Any, i: int, n: int, run: int) -> None:
+        if status is not None:
+            status.update(f"solving {p.name} ({i + 1}/{n}, run {run + 1}/{repeat})")
+
+    if status is not None:
+        status.start()
+    try:
+        return bench_mod.run_scaling(points, timeout=timeout, max_memory=memory,
+                                     repeat=repeat, notify=notify, symmetry=symmetry)
+    finally:
+        if status is not None:
+            status.stop()
+
+
 def bench_scaling(
     max_size: Annotated[int, typer.Option(
         "--max-size", min=1, help="Run the grid points up to this size (cubes, or places on "
@@ -147,22 +170,7 @@ def bench_scaling(
         what = f"--only {' '.join(only)}" if only else f"--max-size {max_size}"
         die(f"{what}: no grid instance selected; names look like cubes-c6-b3-opaque-k8, "
             "cooking-k4")
-    console = stderr_console()
-    status = console.status("") if console is not None else None
-
-    def notify(p: Any, i: int, n: int, run: int) -> None:
-        if status is not None:
-            status.update(f"solving {p.name} ({i + 1}/{n}, run {run + 1}/{repeat})")
-
-    if status is not None:
-        status.start()
-    try:
-        rows = bench_mod.run_scaling(points, timeout=timeout, max_memory=memory,
-                                     repeat=repeat, notify=notify,
-                                     symmetry=False if no_symmetry else None)
-    finally:
-        if status is not None:
-            status.stop()
+    rows = _run_points(points, timeout, memory, repeat, False if no_symmetry else None)
     if json_out is not None:
         _write_rows(rows, json_out)
     if str(json_out) != "-":
