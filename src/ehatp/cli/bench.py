@@ -91,7 +91,6 @@ def bench_table1(
     raise typer.Exit(EXIT_NO_POLICY if failed else EXIT_OK)
 
 
-@app.command("scaling")
 def _run_points(points: list[Any], timeout: float, memory: int, repeat: int,
                 symmetry: bool | None) -> list[dict[str, Any]]:
     """Return the scaling rows of ``points``, each solved in a process of its own, with a
@@ -115,6 +114,7 @@ def _run_points(points: list[Any], timeout: float, memory: int, repeat: int,
             status.stop()
 
 
+@app.command("scaling")
 def bench_scaling(
     max_size: Annotated[int, typer.Option(
         "--max-size", min=1, help="Run the grid points up to this size (cubes, or places on "
