@@ -358,3 +358,31 @@ def test_an_inform_chosen_by_name_at_a_renamed_node_is_written_over_the_real_obj
     forced = solve(p).policy
     assert forced is not None and forced.version == 3
     assert not ehatp.validate(p, forced).ok  # what the check keeps from being written
+
+
+# the imported IPC-2020 domains with interchangeable objects: their policies are written lifted
+IPC_LIFTED = ("2020-to-Hiking", "2020-to-Minecraft-Regular", "2020-to-Rover-GTOHP",
+              "2020-to-AssemblyHierarchical", "2020-to-Satellite-GTOHP")
+
+
+@pytest.mark.slow
+@pytest.mark.filterwarnings("ignore:.*deprecated - use:DeprecationWarning")
+@pytest.mark.parametrize("name", IPC_LIFTED)
+def test_an_imported_ipc_domain_gives_the_same_figures_lifted_and_expanded_and_both_validate(
+        name: str) -> None:
+    pytest.importorskip("unified_planning", reason="ehatp[hddl] (unified-planning) not installed")
+    from ehatp.experiments import hddl_report
+    from ehatp.formats import hddl
+
+    shipped = {n: (d, p) for n, d, p in hddl_report.domains_shipped()}
+    d, pf = shipped[name]
+    p = hddl.import_hddl(d, pf, sidecar=hddl.Sidecar(expects="nothing")).problem()
+    lifted, real = solve(p, timeout=120), solve(p, timeout=120, expand=True)
+    assert lifted.policy is not None and real.policy is not None
+    assert json.loads(lifted.policy.to_json())["version"] == 3
+    assert json.loads(real.policy.to_json())["version"] == 2
+    figures = ("cost", "communications", "leaves", "worst_case", "expected")
+    assert ([getattr(lifted.policy, f) for f in figures]
+            == [getattr(real.policy, f) for f in figures])
+    assert ehatp.validate(p, lifted.policy).ok and ehatp.validate(p, real.policy).ok
+    assert walk_policy(p, lifted.policy).ok
