@@ -123,11 +123,7 @@ class Semantics:
                                  "turn")
             label = rest
         want = "".join(label.split())
-        moves = self.moves(es)
-        if want == PASS and es.forced and not any(move.kind == PASS for move in moves):
-            # §4: the fairness rule says such a pass need not be covered, not that it cannot
-            # happen: an execution that met one is replayed from where it happened
-            moves = self.moves(es._replace(forced=False))
+        moves = self.legal_moves(es)
         found = next((move for move in moves if "".join(move.label.split()) == want), None)
         if found is None and want.endswith("]") and "[" in want:
             base, _, after = want[:-1].rpartition("[")
@@ -140,6 +136,16 @@ class Semantics:
         who = self.names[es.turn]
         raise ValueError(f"{label!r} is not a move of {who} here; options: "
                          + ", ".join(move.label for move in moves))
+
+    def legal_moves(self, es: EState) -> list[Move]:
+        """§4: every move the agent to move can make: its options (:meth:`moves`) and, right
+        after a forced robot wait, the human's ``pass`` the fairness rule leaves out -- a
+        policy *need not cover* it, which does not make it impossible (an execution that met
+        one is replayed, and ``execute --replan`` plans on from it)."""
+        moves = self.moves(es)
+        if es.turn == HUMAN and es.forced and not any(m.kind == PASS for m in moves):
+            moves += [m for m in self.moves(es._replace(forced=False)) if m.kind == PASS]
+        return moves
 
     def trace_label(self, es: EState, move: Move) -> str:
         """§4: ``move``'s label as :meth:`follow` reads it back from ``es`` to this very move:

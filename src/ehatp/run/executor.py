@@ -36,7 +36,6 @@ from ..epistemic.semantics import (
     ANSWER,
     ASK,
     INFORM,
-    PASS,
     WAIT,
     Move,
     Semantics,
@@ -232,11 +231,9 @@ class Executor:
         forced robot wait (docs/semantics.md §4: such a pass *need not be covered*, which does
         not make it impossible; a human who does it leaves the policy, and ``execute --replan``
         plans again from there)."""
-        moves = self.possible_human_moves()
-        if moves and self.state.forced and not any(m.kind == PASS for m in moves):
-            moves = moves + [m for m in self.sem.moves(self.state._replace(forced=False))
-                             if m.kind == PASS]
-        return moves
+        if self.done or self.state.turn != HUMAN:
+            return []
+        return self.sem.legal_moves(self.state)
 
     def expected_human_actions(self) -> list[Action]:
         """The human moves the policy covers now (empty at the robot's turn or when done)."""
@@ -667,7 +664,7 @@ class Executor:
             where = f"policy node {self.node.id}"
         who = self.human_name
         legal = self.legal_human_moves()
-        aside = ("" if any(m is move for m in self._moves()) else
+        aside = ("" if any(m.label == move.label for m in self._moves()) else
                  " (a policy need not: after a forced robot wait, docs/semantics.md §4)")
         raise UncoveredHumanAction(move.label, [a.label for a in self.expected_human_actions()],
                                    [m.label for m in legal],
