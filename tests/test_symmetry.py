@@ -5,8 +5,11 @@ same costs as the full one with policies that validate on the real problem."""
 from __future__ import annotations
 
 import re
+from collections import Counter
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from ehatp.check.validator import validate
 from ehatp.epistemic.state import EState
@@ -195,3 +198,33 @@ def test_unsolvable_either_way() -> None:
     p = grid(4, 2, 2, head='goal = ["in(c1, box1)", "not in(c1, box1)"]\n')
     on, off = solve(p, symmetry=True), solve(p, symmetry=False)
     assert on.status == off.status == "unsolvable"
+
+
+def test_the_canonical_form_does_not_depend_on_what_was_canonicalised_before() -> None:
+    # canon interns signatures and remembers renamings and world signatures: a fresh
+    # Symmetry that meets the states in the reverse order must give the same forms
+    p = grid(4, 2, 4)
+    out = search(ground_problem(p), max_states=600)
+    states = list(out.graph.states)
+    first = detect(out.graph.sem.g)
+    again = detect(out.graph.sem.g)
+    assert first is not None and again is not None
+    forward = [first.canon(es) for es in states]
+    backward = [again.canon(es) for es in reversed(states)][::-1]
+    assert [c for c, _ in forward] == [c for c, _ in backward]
+    assert [first.perms[p] for _, p in forward] == [again.perms[p] for _, p in backward]
+    assert any(len(es.worlds) > 1 for es in states)
+
+
+@given(st.lists(st.integers(0, 3), min_size=1, max_size=8), st.data())
+def test_run_length_keys_order_multisets_as_sorted_lists_do(xs: list[int],
+                                                            data: st.DataObject) -> None:
+    # canon compares the worlds' part of two objects' signatures as (value, -count) runs;
+    # both multisets have one entry per world, so the order must be that of the sorted lists
+    ys = data.draw(st.lists(st.integers(0, 3), min_size=len(xs), max_size=len(xs)))
+
+    def runs(zs: list[int]) -> list[tuple[int, int]]:
+        return sorted((v, -c) for v, c in Counter(zs).items())
+
+    assert (runs(xs) < runs(ys)) == (sorted(xs) < sorted(ys))
+    assert (runs(xs) == runs(ys)) == (sorted(xs) == sorted(ys))

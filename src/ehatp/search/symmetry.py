@@ -40,7 +40,7 @@ from itertools import combinations
 from typing import Any
 
 from ..epistemic.semantics import Semantics
-from ..epistemic.state import EState, Worlds, normalize, states_of
+from ..epistemic.state import EState, Worlds, states_of
 from ..model.formula import And, Formula, GAtom, GTest, Not, Or
 from ..model.grounded import GModel, Grounded
 from ..model.htn import Agenda
@@ -64,6 +64,12 @@ def enabled(symmetry: bool | None, limits: Limits) -> bool:
                       stacklevel=3)
         return OVERRIDE
     return limits.symmetry
+
+RENAMED_CACHE = 1 << 20
+"""How many renamed world states :meth:`Symmetry.state` remembers before it starts afresh."""
+
+COLUMNS_CACHE = 1 << 10
+"""How many sets of worlds :meth:`Symmetry.canon` keeps the signatures of."""
 
 _TOKEN = re.compile(r"[^\s(),=\[\]<>!|{}+;:]+")
 
@@ -128,8 +134,17 @@ class Symmetry:
             if roles_t:
                 self._task_parts[t] = parts
                 self._task_roles[t] = roles_t
-        self._sig: dict[int, list[list[int]]] = {}
-        self._ag_sig: dict[Agenda, list[list[tuple[int, int]]]] = {}
+        self._sig: dict[int, tuple[tuple[int, ...], ...]] = {}
+        self._ag_sig: dict[Agenda, tuple[tuple[tuple[int, int], ...], ...]] = {}
+        self._renamed: dict[tuple[int, int], int] = {}
+        self._renamed_ag: dict[tuple[int, Agenda], Agenda] = {}
+        self._columns: dict[Worlds, _WorldColumns] = {}
+        self._sig_ids: dict[int, tuple[int, ...]] = {}
+        self._ag_ids: dict[Agenda, tuple[int, ...]] = {}
+        self._sig_index: dict[tuple[int, ...], int] = {}
+        self._sig_values: list[tuple[int, ...]] = []
+        self._ag_index: dict[tuple[tuple[int, int], ...], int] = {}
+        self._ag_values: list[tuple[tuple[int, int], ...]] = []
 
     @property
     def g(self) -> Grounded:
@@ -229,9 +244,21 @@ class Symmetry:
 
     # -- applying a permutation ---------------------------------------------------------------
     def state(self, pid: int, s: int) -> int:
+        """The state ``s`` with its objects renamed by ``pid`` (memoised: the worlds of many
+        belief sets share states, so most renamings have been done before)."""
         moved = s & self.movable_mask
         if pid == 0 or not moved:
             return s
+        key = (pid, s)
+        r = self._renamed.get(key)
+        if r is None:
+            if len(self._renamed) >= RENAMED_CACHE:
+                self._renamed.clear()
+            r = self._renamed[key] = self._rename_state(pid, s, moved)
+        return r
+
+    def _rename_state(self, pid: int, s: int, moved: int) -> int:
+        """:meth:`state`, computed: each movable atom of ``s`` moved to its image."""
         amap = self.atom_map(pid)
         out = s & ~self.movable_mask
         while moved:
@@ -242,8 +269,19 @@ class Symmetry:
         return out
 
     def agenda(self, pid: int, ag: Agenda) -> Agenda:
+        """The agenda ``ag`` with its objects renamed by ``pid`` (memoised)."""
         if pid == 0 or not ag:
             return ag
+        key = (pid, ag)
+        r = self._renamed_ag.get(key)
+        if r is None:
+            if len(self._renamed_ag) >= RENAMED_CACHE:
+                self._renamed_ag.clear()
+            r = self._renamed_ag[key] = self._rename_agenda(pid, ag)
+        return r
+
+    def _rename_agenda(self, pid: int, ag: Agenda) -> Agenda:
+        """:meth:`agenda`, computed."""
         tmap = self.task_map(pid)
         out: list[int] = []
         for t in ag:  # no blocks: partial order turns the reduction off (detect)
@@ -252,7 +290,9 @@ class Symmetry:
         return tuple(out)
 
     def worlds(self, pid: int, ws: Worlds) -> Worlds:
-        return normalize((self.state(pid, s), self.agenda(pid, a)) for s, a in ws)
+        """The worlds ``ws`` renamed, in canonical order (a renaming maps distinct worlds to
+        distinct worlds, so sorting is enough)."""
+        return tuple(sorted([(self.state(pid, s), self.agenda(pid, a)) for s, a in ws]))
 
     def apply(self, pid: int, es: EState) -> EState:
         """The epistemic state ``es`` with its objects renamed by ``pid``."""
@@ -265,35 +305,57 @@ class Symmetry:
                            worlds=self.worlds(pid, es.worlds))
 
     # -- canonical form -----------------------------------------------------------------------
-    def _state_sig(self, s: int) -> list[list[int]]:
+    def _state_sig(self, s: int) -> tuple[tuple[int, ...], ...]:
         """Per movable object, the roles of its true atoms in ``s`` (sorted)."""
         r = self._sig.get(s)
         if r is None:
-            r = [[] for _ in self.objects]
+            acc: list[list[int]] = [[] for _ in self.objects]
             moved = s & self.movable_mask
             roles = self._atom_roles
             while moved:
                 low = moved & -moved
                 for o, role in roles[low.bit_length() - 1]:
-                    r[o].append(role)
+                    acc[o].append(role)
                 moved ^= low
-            for x in r:
-                x.sort()
-            self._sig[s] = r
+            r = self._sig[s] = tuple(tuple(sorted(x)) for x in acc)
         return r
 
-    def _agenda_sig(self, ag: Agenda) -> list[list[tuple[int, int]]]:
+    def _agenda_sig(self, ag: Agenda) -> tuple[tuple[tuple[int, int], ...], ...]:
         """Per movable object, (position, role) of the agenda's tasks naming it."""
         r = self._ag_sig.get(ag)
         if r is None:
-            r = [[] for _ in self.objects]
+            acc: list[list[tuple[int, int]]] = [[] for _ in self.objects]
             roles = self._task_roles
             for pos, t in enumerate(ag):
                 assert isinstance(t, int)
                 for o, role in roles.get(t, ()):
-                    r[o].append((pos, role))
-            self._ag_sig[ag] = r
+                    acc[o].append((pos, role))
+            r = self._ag_sig[ag] = tuple(tuple(x) for x in acc)
         return r
+
+    def _state_ids(self, s: int) -> tuple[int, ...]:
+        """:meth:`_state_sig` with each object's signature interned as an int."""
+        r = self._sig_ids.get(s)
+        if r is None:
+            r = self._sig_ids[s] = tuple(self._intern(x, self._sig_index, self._sig_values)
+                                         for x in self._state_sig(s))
+        return r
+
+    def _agenda_ids(self, ag: Agenda) -> tuple[int, ...]:
+        """:meth:`_agenda_sig` with each object's signature interned as an int."""
+        r = self._ag_ids.get(ag)
+        if r is None:
+            r = self._ag_ids[ag] = tuple(self._intern(x, self._ag_index, self._ag_values)
+                                         for x in self._agenda_sig(ag))
+        return r
+
+    @staticmethod
+    def _intern(x: Any, index: dict[Any, int], values: list[Any]) -> int:
+        i = index.get(x)
+        if i is None:
+            i = index[x] = len(values)
+            values.append(x)
+        return i
 
     def canon(self, es: EState) -> tuple[EState, int]:
         """The canonical representative of ``es`` and the permutation that maps ``es`` to it.
@@ -317,27 +379,73 @@ class Symmetry:
         being interchangeable (then the stable order decides, and two members of one orbit may
         keep two representatives: less reduction, never a wrong one). Whatever the order,
         the renaming is a permutation within classes, an automorphism of the problem, so the
-        representative is a real state of the same value (§3)."""
+        representative is a real state of the same value (§3).
+
+        The worlds' part of a signature is computed only for an object that ties with another
+        on the rest, and kept with the set of worlds (:class:`_WorldColumns`): most generated
+        states share their worlds with one met before. Signatures are compared by value, never
+        by the order they were first met in, so the form does not depend on history."""
         tsig = self._state_sig(es.true)
         rsig = self._agenda_sig(es.robot_agenda)
         hsigs = [self._agenda_sig(h) for h in es.human_agendas]
-        wsigs = [(self._state_sig(s), self._agenda_sig(a)) for s, a in es.worlds]
+        n = len(self.objects)
+        cols = self._columns.get(es.worlds)
+        if cols is None:
+            if len(self._columns) >= COLUMNS_CACHE:
+                self._columns.clear()
+            cols = self._columns[es.worlds] = _WorldColumns(self, es.worlds)
         perm: list[int] | None = None
         for cls in self.classes:
-            keys = []
-            for o in cls:
-                ws = sorted((ss[o], sa[o]) for ss, sa in wsigs)
-                keys.append((tsig[o], rsig[o], sorted(h[o] for h in hsigs), ws))
+            keys: list[tuple[Any, ...]] = [
+                (tsig[o], rsig[o], tuple(sorted(h[o] for h in hsigs))) for o in cls]
+            tied = Counter(keys)
+            for k, o in enumerate(cls):
+                if tied[keys[k]] > 1:  # else the true state and agendas already place it
+                    keys[k] = (*keys[k], cols.key(o))
             order = sorted(range(len(cls)), key=keys.__getitem__)
             if any(k != j for j, k in enumerate(order)):
                 if perm is None:
-                    perm = list(range(len(self.objects)))
+                    perm = list(range(n))
                 for rank, k in enumerate(order):
                     perm[cls[k]] = cls[rank]
         if perm is None:
             return es, 0
         pid = self.pid(tuple(perm))
         return self.apply(pid, es), pid
+
+
+class _WorldColumns:
+    """The part of an object's signature that a set of worlds gives (:meth:`Symmetry.canon`),
+    computed per object when first needed and kept with the worlds: most generated states
+    share their worlds with one seen before."""
+
+    __slots__ = ("keys", "scols", "acols", "sym", "worlds")
+
+    def __init__(self, sym: Symmetry, worlds: Worlds) -> None:
+        self.sym = sym
+        self.worlds = worlds
+        self.keys: list[list[tuple[Any, int]] | None] = [None] * len(sym.objects)
+        self.scols: list[tuple[int, ...]] | None = None
+        self.acols: list[tuple[int, ...]] = []
+
+    def key(self, o: int) -> list[tuple[Any, int]]:
+        """Return the sorted multiset, over the worlds, of object ``o``'s (state role, agenda
+        role) signature, run-length encoded as (value, -count): every object has one entry
+        per world, so these order exactly as the sorted lists of entries would."""
+        r = self.keys[o]
+        if r is None:
+            sym = self.sym
+            if self.scols is None:  # per object, its column over the worlds (zip transposes)
+                n = len(sym.objects)
+                ws = self.worlds
+                rows = [sym._state_ids(s) for s, _ in ws]
+                self.scols = list(zip(*rows, strict=True)) if ws else [()] * n
+                rows = [sym._agenda_ids(a) for _, a in ws]
+                self.acols = list(zip(*rows, strict=True)) if ws else [()] * n
+            sv, av = sym._sig_values, sym._ag_values
+            column = Counter(zip(self.scols[o], self.acols[o], strict=True))
+            r = self.keys[o] = sorted([((sv[s], av[a]), -c) for (s, a), c in column.items()])
+        return r
 
 
 # -- detection ----------------------------------------------------------------------------------
