@@ -10,7 +10,6 @@ input too, and also one line.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import platform
 import sys
 import tempfile
@@ -156,8 +155,8 @@ def _usage_errors() -> Iterator[None]:
 
 def internal_error(e: BaseException, argv: Sequence[str], debug: bool) -> NoReturn:
     """Report an exception that is the program's fault: one line, exit code 3. The traceback
-    goes to a file named after its content (the same failure reuses one file), or to the
-    screen with ``--debug``."""
+    goes to a new file only the user can read (:func:`report_file`), or to the screen with
+    ``--debug``."""
     what = f"{type(e).__name__}: {e}" if str(e) else type(e).__name__
     what = " ".join(what.split())
     tb = "".join(traceback.format_exception(e))
@@ -167,16 +166,23 @@ def internal_error(e: BaseException, argv: Sequence[str], debug: bool) -> NoRetu
         raise typer.Exit(EXIT_INTERNAL)
     report = (f"ehatp {__version__} internal error (Python {platform.python_version()}, "
               f"{sys.platform})\ncommand: ehatp {' '.join(argv)}\n\n{tb}")
-    digest = hashlib.sha256(tb.encode()).hexdigest()[:12]
-    path = Path(tempfile.gettempdir()) / f"ehatp-internal-error-{digest}.txt"
     try:
-        path.write_text(report, encoding="utf-8")
-        where = f"details in {path}"
+        where = f"details in {report_file(report)}"
     except OSError:
         where = "run again with `ehatp --debug ...` to see the traceback"
     typer.echo(f"internal error: {what}; this is a bug in ehatp, not in your input; {where} "
                "(please report it)", err=True)
     raise typer.Exit(EXIT_INTERNAL)
+
+
+def report_file(report: str) -> Path:
+    """Return the path of a new file holding ``report``: made by :func:`tempfile.mkstemp` in
+    the temporary folder, under a name no one can guess in advance and readable by the user
+    alone (mode 0600), so that another user can neither plant it nor read it."""
+    fd, name = tempfile.mkstemp(prefix="ehatp-internal-error-", suffix=".txt")
+    with open(fd, "w", encoding="utf-8") as f:
+        f.write(report)
+    return Path(name)
 
 
 def write_output(text: str, out: Path | None) -> None:
