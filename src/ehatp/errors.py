@@ -7,6 +7,27 @@ not a bug", and a subclass where it wants to tell one case apart.
 
 from __future__ import annotations
 
+import re
+
+# C0 controls, DEL and C1 controls: what a terminal may read as a command (ESC starts the
+# escape codes that move the cursor, set the title, or write to the clipboard)
+_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f]")
+_CONTROL_BUT_LINES = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f]")
+
+
+def control_char(text: str) -> str | None:
+    """Return the first control character in ``text`` (newline and tab included), or None."""
+    m = _CONTROL.search(text)
+    return None if m is None else m.group()
+
+
+def printable(text: str, *, lines: bool = False) -> str:
+    """Return ``text`` with every control character written as its Python escape (ESC as
+    ``\\x1b``), so that printing it to a terminal shows it instead of obeying it. With
+    ``lines`` newlines and tabs stay as they are (text of several lines)."""
+    pattern = _CONTROL_BUT_LINES if lines else _CONTROL
+    return pattern.sub(lambda m: repr(m.group())[1:-1], text)
+
 
 class EhatpError(Exception):
     """Base of the errors ehatp reports to users."""
@@ -78,4 +99,4 @@ class ExamplesNotFound(EhatpError):
 
 __all__ = ["DomainError", "DotMissing", "EhatpError", "ExamplesNotFound", "ExecutionError",
            "HddlMissing", "HddlUnsupported", "InputError", "PolicyMismatch",
-           "UncoveredHumanAction"]
+           "UncoveredHumanAction", "control_char", "printable"]

@@ -24,7 +24,7 @@ from typer.core import TyperGroup
 from typer.exceptions import TyperException
 
 from .. import __version__
-from ..errors import DomainError, EhatpError, InputError
+from ..errors import DomainError, EhatpError, InputError, printable
 from ..formats.policy import Policy
 from ..formats.policy_check import check_policy_problem, read_policy
 from ..formats.problem_toml import load
@@ -39,8 +39,9 @@ ARGV_KEY = "ehatp.argv"  # where the command line is kept for an internal-error 
 
 
 def die(message: str, code: int = EXIT_BAD_INPUT) -> NoReturn:
-    """One line on stderr, then exit; newlines are folded so the promise of one line holds."""
-    typer.echo(f"error: {' '.join(message.split())}", err=True)
+    """One line on stderr, then exit; newlines are folded so the promise of one line holds,
+    and control characters are written escaped (a name cannot send a terminal escape code)."""
+    typer.echo(f"error: {printable(' '.join(message.split()))}", err=True)
     raise typer.Exit(code)
 
 
@@ -158,10 +159,10 @@ def internal_error(e: BaseException, argv: Sequence[str], debug: bool) -> NoRetu
     goes to a new file only the user can read (:func:`report_file`), or to the screen with
     ``--debug``."""
     what = f"{type(e).__name__}: {e}" if str(e) else type(e).__name__
-    what = " ".join(what.split())
+    what = printable(" ".join(what.split()))
     tb = "".join(traceback.format_exception(e))
     if debug:
-        typer.echo(tb.rstrip("\n"), err=True)
+        typer.echo(printable(tb.rstrip("\n"), lines=True), err=True)
         typer.echo(f"internal error: {what}; traceback above", err=True)
         raise typer.Exit(EXIT_INTERNAL)
     report = (f"ehatp {__version__} internal error (Python {platform.python_version()}, "
@@ -186,10 +187,10 @@ def report_file(report: str) -> Path:
 
 
 def write_output(text: str, out: Path | None) -> None:
-    """Write a command's output to ``out``, or to stdout when it is None; a file that cannot
-    be written is one line and exit 2."""
+    """Write a command's output to ``out``, or to stdout when it is None (control characters
+    escaped when stdout is a terminal); a file that cannot be written is one line and exit 2."""
     if out is None:
-        sys.stdout.write(text)
+        sys.stdout.write(printable(text, lines=True) if sys.stdout.isatty() else text)
         return
     try:
         out.write_text(text, encoding="utf-8")

@@ -9,18 +9,36 @@ turns out not to fit the problem (a ``policy-mismatch`` line); 3 internal error.
 from __future__ import annotations
 
 import json
+import re
 import sys
 from pathlib import Path
+from typing import Any, TextIO
 
 import typer
 
 from ..errors import ExecutionError, InputError, PolicyMismatch
 from ..formats.policy_check import read_policy
-from ..run.execute import EXIT_STOPPED, json_lines, run
+from ..run.execute import EXIT_STOPPED, Emit, run
 from ..run.executor import Executor
 from .common import command_app, die, load_problem, user_errors
 
 app = command_app()
+
+# what json.dumps leaves raw with ensure_ascii=False and a terminal may obey: DEL and the C1
+# controls (U+009B is a one-character escape-sequence start on some terminals); inside JSON
+# strings only, so \u escapes keep every line valid JSON
+_RAW_CONTROL = re.compile("[\x7f-\x9f]")
+
+
+def safe_json_lines(out: TextIO) -> Emit:
+    """Return the emitter of the protocol's JSON lines on ``out`` (one line each, flushed):
+    no control character is written raw, so an echoed input line cannot drive a terminal."""
+    def emit(message: dict[str, Any]) -> None:
+        text = json.dumps(message, ensure_ascii=False)
+        out.write(_RAW_CONTROL.sub(lambda m: f"\\u{ord(m.group()):04x}", text) + "\n")
+        out.flush()
+    return emit
+
 
 
 @app.command("execute")
@@ -60,7 +78,7 @@ def execute_cmd(
     if save_replans is not None and not save_replans.is_dir():
         die(InputError(str(save_replans), "", "not a folder",
                        "create it, or give an existing folder to --save-replans").line())
-    code = run(ex, sys.stdin, json_lines(sys.stdout), replan=replan,
+    code = run(ex, sys.stdin, safe_json_lines(sys.stdout), replan=replan,
                source=str(policy) if policy is not None else "solved now",
                save=save_replans)
     raise typer.Exit(code)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import typer
 
-from ..errors import HddlMissing, HddlUnsupported
+from ..errors import HddlMissing, HddlUnsupported, printable
 from ..formats.hddl import import_hddl
 from .common import command_app, die, user_errors
 
@@ -42,5 +42,5 @@ def import_hddl_cmd(
         mod, prob = imp.write(target)
     typer.echo(f"wrote {mod} (the domain, {agent}'s HTN) and {prob} (the problem)")
     for n in imp.notes:
-        typer.echo(f"  note: {n}")
+        typer.echo(f"  note: {printable(n)}")
     typer.echo(f"next: ehatp solve {prob}")

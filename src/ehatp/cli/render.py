@@ -7,7 +7,7 @@ from pathlib import Path
 
 import typer
 
-from ..errors import DotMissing
+from ..errors import DotMissing, printable
 from ..formats.policy_check import check_policy_problem, read_policy
 from ..formats.render import DEFAULT_MAX_NODES, Format, render
 from .common import command_app, die, load_problem, user_errors, write_output
@@ -53,5 +53,5 @@ def render_command(
         except DotMissing as e:
             die(str(e))
     if notes:
-        typer.echo(f"render: {policy}: collapsed: {'; '.join(notes)}", err=True)
+        typer.echo(printable(f"render: {policy}: collapsed: {'; '.join(notes)}"), err=True)
     write_output(text, out)

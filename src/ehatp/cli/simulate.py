@@ -7,6 +7,7 @@ from pathlib import Path
 
 import typer
 
+from ..errors import printable
 from ..run.simulate import run
 from .common import command_app, user_errors
 
@@ -28,5 +29,5 @@ def simulate_cmd(
     believes. Exit code 0: goal reached; 1: the human left the policy; 2: bad input."""
     with user_errors(problem):
         code = run(problem, policy_path=policy, human=human, script_path=script,
-                   seed=seed, out=typer.echo)
+                   seed=seed, out=lambda s: typer.echo(printable(s, lines=True)))
     raise typer.Exit(code)

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from ..errors import printable
 from ..model.options import ObjectiveKind
 from ..model.problem import Problem, parse_size
 from ..search.limits import SolveStatus
@@ -150,7 +151,7 @@ def solve_cmd(
     budget = Budget(limits.timeout if timeout is None else timeout,
                     limits.max_memory if memory is None else memory, start=t0)
     console = stderr_console()
-    live = LiveProgress(console, prob.name) if console is not None else None
+    live = LiveProgress(console, printable(prob.name)) if console is not None else None
     target = out if out is not None else Path(f"{problem.stem}.policy.json")
     try:
         with user_errors(problem):
@@ -206,17 +207,19 @@ def _write(result: Result, target: Path, budget: Budget) -> tuple[Result, bool]:
 
 def _summary(prob: Problem, result: Result, wall_ms: float, written: Path | None) -> None:
     st = result.stats
+    # a problem built in Python may hold any name, and a reason quotes the domain's names
+    name, reason = printable(prob.name), printable(str(result.reason))
     if result.status == SolveStatus.SOLVED and result.optimal and result.reason:
-        typer.secho(f"{prob.name}: solved (optimal policy found); {result.reason}",
+        typer.secho(f"{name}: solved (optimal policy found); {reason}",
                     fg="yellow", bold=True)
     elif result.status == SolveStatus.SOLVED and result.optimal:
-        typer.secho(f"{prob.name}: solved (optimal policy found)", fg="green", bold=True)
+        typer.secho(f"{name}: solved (optimal policy found)", fg="green", bold=True)
     elif result.status == SolveStatus.SOLVED:
-        typer.secho(f"{prob.name}: solved, {result.reason}", fg="yellow", bold=True)
+        typer.secho(f"{name}: solved, {reason}", fg="yellow", bold=True)
     elif result.status == SolveStatus.UNSOLVABLE:
-        typer.secho(f"{prob.name}: {result.reason}", fg="red", bold=True)
+        typer.secho(f"{name}: {reason}", fg="red", bold=True)
     else:
-        typer.secho(f"{prob.name}: stopped early, {result.reason}; partial statistics:",
+        typer.secho(f"{name}: stopped early, {reason}; partial statistics:",
                     fg="yellow", bold=True)
     rows: list[tuple[str, Any]] = [
         ("states", f"{st.get('generated', 0):,} generated, {st.get('distinct', 0):,} distinct, "
@@ -241,4 +244,4 @@ def _summary(prob: Problem, result: Result, wall_ms: float, written: Path | None
     elif result.status != SolveStatus.UNSOLVABLE:
         rows.append(("policy", "none found before the work stopped"))
     for k, v in rows:
-        typer.echo(f"  {k:<15} {v}")
+        typer.echo(printable(f"  {k:<15} {v}"))

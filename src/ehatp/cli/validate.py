@@ -8,6 +8,7 @@ from typing import Annotated
 
 import typer
 
+from ..errors import printable
 from ..model.options import ObjectiveKind
 from .common import (
     EXIT_NO_POLICY,
@@ -43,12 +44,13 @@ def validate_cmd(
     prob = with_objective(load_problem(problem), objective)  # as `solve --objective` planned
     pol = load_policy(policy, counts=False)  # whether counts match is the validator's call
     if pol.problem != prob.name:  # legal to check, but most likely the wrong pair of files
-        typer.echo(f"note: {policy} was planned for {pol.problem!r}, not {prob.name!r}",
+        typer.echo(printable(f"note: {policy} was planned for {pol.problem!r}, not "
+                             f"{prob.name!r}"),
                    err=True)
     with user_errors(policy):
         report = ehatp.validate(prob, pol)
     if report.ok:
-        typer.secho(f"valid: {policy} is a valid policy for {prob.name}", fg="green")
+        typer.secho(printable(f"valid: {policy} is a valid policy for {prob.name}"), fg="green")
         raise typer.Exit(EXIT_OK)
-    typer.secho(f"invalid: {report.message}", fg="red")
+    typer.secho(printable(f"invalid: {report.message}"), fg="red")
     raise typer.Exit(EXIT_NO_POLICY)

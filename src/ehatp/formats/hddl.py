@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..errors import HddlMissing, HddlUnsupported
+from ..errors import HddlMissing, HddlUnsupported, control_char
 from ..model.domain import Domain
 from ..model.problem import BeliefWorld, Limits, Problem
 from .hddl_sidecar import AGENTS, Sidecar, literal, read_sidecar
@@ -85,8 +85,14 @@ def _isort(name: str) -> tuple[int, str]:
 
 
 def _q(s: str) -> str:
-    """A Python (and TOML basic) string literal."""
-    return '"' + s.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    """A Python (and TOML basic) string literal: backslashes and quotes escaped, and every
+    control or line-separating character as a ``\\uXXXX`` escape, which both languages read
+    back as that character (so the literal never ends early, in either file)."""
+    body = s.replace("\\", "\\\\").replace('"', '\\"')
+    return '"' + _UNSAFE_IN_LITERAL.sub(lambda m: f"\\u{ord(m.group()):04x}", body) + '"'
+
+
+_UNSAFE_IN_LITERAL = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029]")
 
 
 def _py(name: str, args: Sequence[str]) -> str:
@@ -259,11 +265,24 @@ def import_hddl(domain_file: str | Path, problem_file: str | Path, *, agent: str
         first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
         raise HddlUnsupported(f"{domain_file}: unified-planning cannot read it "
                               f"({type(e).__name__}: {first})") from None
+    _printable_names(up_problem, domain_file)
     name = _domain_name(domain_file)
     module = module_file or f"{_ident(name)}.py"
     imported = _Converter(up_problem, agent, side, name, module).run()
     imported.problem_name = f"{name}/{Path(problem_file).name.removesuffix('.hddl')}"
     return imported
+
+
+def _printable_names(p: Any, where: str | Path) -> None:
+    """Refuse a name of the HDDL files that holds a control character (ESC included): the
+    names reach a terminal and the files ehatp writes."""
+    named = [p, *p.user_types, *p.fluents, *p.actions, *p.all_objects,
+             *getattr(p, "tasks", ()), *getattr(p, "methods", ())]
+    for x in named:
+        name = str(getattr(x, "name", ""))
+        if (ch := control_char(name)) is not None:
+            raise HddlUnsupported(f"{where}: the name {name!r} holds the control character "
+                                  f"{ch!r}; rename it with letters, digits, - and _")
 
 
 def _domain_name(path: str | Path) -> str:

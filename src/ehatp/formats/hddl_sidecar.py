@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import HddlUnsupported
+from ..errors import HddlUnsupported, control_char
 
 AGENTS = ("robot", "human")
 CLASSES = ("observable", "inferable", "hidden")
@@ -105,7 +105,25 @@ def read_sidecar(path: str | Path | None) -> Sidecar:
     return _sidecar_from(data, str(p))
 
 
+def _printable(data: Mapping[str, Any], where: str) -> None:
+    """Refuse a key or string of the sidecar that holds a control character (ESC included):
+    they become names, printed to terminals and written to files. (A walk with a stack: any
+    depth.)"""
+    stack: list[tuple[str, Any]] = [("", data)]
+    while stack:
+        place, value = stack.pop()
+        if isinstance(value, Mapping):
+            for k, v in value.items():
+                stack += [(place or "a key", k), (f"{place}.{k}" if place else str(k), v)]
+        elif isinstance(value, list | tuple):
+            stack += [(place, v) for v in value]
+        elif isinstance(value, str) and (ch := control_char(value)) is not None:
+            raise HddlUnsupported(f"{where}: {place}: {value!r} holds the control character "
+                                  f"{ch!r}; remove it")
+
+
 def _sidecar_from(data: Mapping[str, Any], where: str, check: bool = True) -> Sidecar:
+    _printable(data, where)
     for table, value in data.items():
         keys = _SIDECAR_KEYS.get(table)
         if keys is None:

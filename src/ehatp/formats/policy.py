@@ -18,6 +18,7 @@ imported in IPython; docs/notebook.md).
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -35,6 +36,29 @@ VERSION_LIFTED = 3  # the version written for a lifted policy (canonical nodes, 
 READS = (1, 2, 3)
 COMM_KINDS = ("inform", "ask", "announce")
 
+# a control character in a JSON string: an escape (\u001b, \n, ...) after an even number of
+# backslashes, or DEL / a C1 character written raw (JSON refuses raw C0 characters itself)
+_CONTROL_IN_JSON = re.compile(r'\\(?:u00[0189][0-9a-fA-F]|u007[fF]|[bfnrt])|[\x7f-\x9f]')
+
+
+def _no_control_characters(name: str, text: str) -> None:
+    """Raise :class:`InputError` when a string of the policy JSON ``text`` holds a control
+    character: no name or label ehatp writes has one, and printed to a terminal one could be
+    an escape code (a policy edited by hand must not reach a terminal with it)."""
+    for m in _CONTROL_IN_JSON.finditer(text):
+        start = m.start()
+        if m.group()[0] == "\\":
+            before = start
+            while before > 0 and text[before - 1] == "\\":
+                before -= 1
+            if (start - before) % 2:  # an escaped backslash followed by letters
+                continue
+        line = text.count("\n", 0, start) + 1
+        col = start - text.rfind("\n", 0, start)
+        char = json.loads(f'"{m.group()}"') if m.group()[0] == "\\" else m.group()
+        raise InputError(name, f"{line}:{col}", f"a string holds the control character "
+                         f"{char!r}, which no policy name or label has (printed, it could be a "
+                         "terminal escape code)", "remove it from the file")
 
 @dataclass
 class PolicyMove:
@@ -363,6 +387,7 @@ class Policy:
         except json.JSONDecodeError as e:
             raise InputError(name, f"{e.lineno}:{e.colno}", f"not valid JSON ({e.msg})",
                              POLICY_FIX) from None
+        _no_control_characters(name, text)
         if not isinstance(raw, dict):
             raise InputError(name, "", "not an ehatp policy (expected a JSON object)",
                              POLICY_FIX)

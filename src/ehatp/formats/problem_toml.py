@@ -25,7 +25,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from ..errors import DomainError, InputError
+from ..errors import DomainError, InputError, control_char
 from ..model.domain import AGENT_TYPE, Domain, is_domain_factory
 from ..model.options import OPTION_KEYS, read_options
 from ..model.problem import (
@@ -279,6 +279,7 @@ def _toml(r: TomlReader, text: str, overrides: Mapping[str, Any] | None) -> dict
                          "flatten the file (a problem needs two levels at most)") from None
     for dotted, value in (overrides or {}).items():
         _override(r.path, data, dotted, value)
+    _printable(r, data)
     for k in data:
         if k not in _TOP_KEYS:
             wrong = r.misplaced("", k)
@@ -286,6 +287,31 @@ def _toml(r: TomlReader, text: str, overrides: Mapping[str, Any] | None) -> dict
                 raise r.err(k, f"unknown table or key {k!r}: {wrong[0]}", wrong[1])
             raise r.err(k, f"unknown table or key {k!r}", f"use {', '.join(sorted(_TOP_KEYS))}")
     return data
+
+
+# where text of several lines is at home (newlines and tabs allowed, other controls not)
+_PROSE = {("problem", "description")}
+
+
+def _printable(r: TomlReader, data: Mapping[str, Any]) -> None:
+    """Refuse a key or string value holding a control character (ESC included): no name of a
+    problem, object or task has one, and printed to a terminal it could be an escape code.
+    (A walk with a stack: any depth.)"""
+    stack: list[tuple[tuple[str, ...], Any]] = [((), data)]
+    while stack:
+        path, value = stack.pop()
+        if isinstance(value, dict):
+            for k, v in value.items():
+                stack += [(path, k), ((*path, k), v)]
+        elif isinstance(value, list):
+            stack += [(path, v) for v in value]
+        elif isinstance(value, str):
+            text = value.replace("\n", "").replace("\t", "") if path in _PROSE else value
+            if (ch := control_char(text)) is not None:
+                place = (f"[{path[0]}] {'.'.join(path[1:])}".strip() if len(path) > 1
+                         else path[0] if path else "")
+                raise r.err(place, f"{value!r} holds the control character {ch!r}",
+                            "remove it: names and values are printable text")
 
 
 def _header(r: TomlReader, prob: Mapping[str, Any], domain: Domain,

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
+from ..errors import printable
 from ..model.problem import Problem
 from .lifted import expanded
 from .policy import COMM_KINDS, Policy, PolicyMove, PolicyNode, timeline
@@ -70,7 +71,7 @@ def print_notes(problem: Problem) -> None:
     """The problem's notes (deprecated spellings and the like), one ``note:`` line each on
     stderr."""
     for note in problem.notes:
-        print(f"note: {note}", file=sys.stderr, flush=True)
+        print(f"note: {printable(note)}", file=sys.stderr, flush=True)
 
 
 def _role(policy: Policy, agent: str | None) -> str:
@@ -243,9 +244,10 @@ _ASCII = str.maketrans({"→": "->"})
 
 
 def plain(lines: Sequence[Line]) -> str:
+    """Return ``lines`` as plain text, control characters of names written escaped."""
     return "\n".join(
         ("".join(_GUIDES[g][0] for g in ln.guides)
-         + "".join(t for t, _ in ln.segments).translate(_ASCII)).rstrip()
+         + printable("".join(t for t, _ in ln.segments)).translate(_ASCII)).rstrip()
         for ln in lines) + "\n"
 
 
@@ -253,13 +255,15 @@ _ROLE_STYLE = {"robot": "bold cyan", "human": "bold magenta", "start": "dim"}
 
 
 def print_rich(lines: Sequence[Line], console: Console) -> None:
+    """Print ``lines`` in colour, control characters of names written escaped (a name cannot
+    send a terminal escape code)."""
     from rich.text import Text
 
     for ln in lines:
         text = Text()
         text.append("".join(_GUIDES[g][1] for g in ln.guides), style="dim")
         for t, style in ln.segments:
-            text.append(t, style=_ROLE_STYLE.get(style, style))
+            text.append(printable(t), style=_ROLE_STYLE.get(style, style))
         text.rstrip()
         console.print(text, soft_wrap=True, highlight=False)
 
