@@ -265,11 +265,11 @@ def p1_policy(tmp_path_factory: pytest.TempPathFactory) -> Path:
     (lambda d: d["nodes"][1]["moves"][0].update(agent="Z"), "nodes[1].moves[0].agent"),
     (lambda d: d["nodes"][1]["moves"][0].update(cost="1"), "nodes[1].moves[0].cost: must be"),
     (lambda d: d["nodes"][1]["moves"][0].update(to=0), "nodes[1].moves[0].to"),
-    (lambda d: d["nodes"][1].update(moves=7), "nodes[1].moves: moves must be a list"),
-    (lambda d: d.update(nodes="none"), "nodes must be a list"),
-    (lambda d: d["nodes"].__setitem__(2, 5), "nodes[2]: a node must be an object"),
-    (lambda d: d.update(stats=[]), "stats must be an object"),
-    (lambda d: d.update(cost=None), "cost must be a number"),
+    (lambda d: d["nodes"][1].update(moves=7), "nodes[1].moves: must be a list"),
+    (lambda d: d.update(nodes="none"), "nodes: must be a list"),
+    (lambda d: d["nodes"].__setitem__(2, 5), "nodes[2]: must be an object"),
+    (lambda d: d.update(stats=[]), "stats: must be an object"),
+    (lambda d: d.update(cost=None), "cost: must be a number"),
 ])
 def test_show_and_render_refuse_an_inconsistent_policy(p1_policy: Path, tmp_path: Path,
                                                        edit: object, expect: str) -> None:

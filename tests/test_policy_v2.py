@@ -26,7 +26,7 @@ from .policy_v1 import tree_dict
 
 V1 = DATA / "p4-v1.json"  # written by the version 1 writer (the tree, timelines included)
 CUBES8 = DATA / "cubes-8.toml"
-SCHEMA = ROOT / "docs" / "policy.schema.json"
+SCHEMA = ROOT / "src" / "ehatp" / "formats" / "policy.schema.json"
 P4 = EXAMPLES_DIR / "cubes" / "p4.toml"
 MAX_BYTES_PER_NODE = 2048
 

@@ -128,9 +128,9 @@ def _unused_renamings(rp: Replay, check: LiftedCheck) -> None:
 
 
 def _header(rp: Replay) -> bool:
-    """Check what the policy says of itself (docs/policy-format.md): node ids, the problem it
-    was planned for, K and the agents' names. Return whether checking may go on (ids and
-    problem name right)."""
+    """Check what the policy says of itself (docs/policy-format.md): node ids, the problem and
+    domain it was planned for, K and the agents' names. Return whether checking may go on
+    (ids, problem and domain names right)."""
     pol, sem, problem = rp.policy, rp.sem, rp.problem
     if any(n.id != i for i, n in enumerate(pol.nodes)):
         rp.fail([], "node ids are not their positions in the node list")
@@ -138,6 +138,11 @@ def _header(rp: Replay) -> bool:
     if pol.problem != problem.name:
         rp.fail([], f"the policy was planned for problem {pol.problem!r}, not for "
                 f"{problem.name!r}: solve this problem, or validate against the "
+                "policy's own problem")
+        return False
+    if pol.domain != problem.domain.name:
+        rp.fail([], f"the policy was planned for domain {pol.domain!r}, not for "
+                f"{problem.domain.name!r}: solve this problem, or validate against the "
                 "policy's own problem")
         return False
     if pol.K != sem.K:

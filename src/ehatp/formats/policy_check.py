@@ -8,9 +8,14 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Callable
 from fractions import Fraction
+from functools import cache
+from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
+
+import fastjsonschema
 
 from ..errors import InputError
 from ..model.problem import Problem
@@ -18,11 +23,13 @@ from .policy import POLICY_FIX, Policy, malformed
 
 
 def read_policy(path: Path | str, *, counts: bool = True) -> Policy:
-    """Read and check a policy file (version 2, or 1 turned into a graph): :meth:`Policy.load`,
-    then the type of every field the tools read and (``counts``) whether the header's counts
-    and the moves' agents match the graph, so a hand-edited or truncated file is one
-    :class:`InputError` line instead of a wrong display or a crash. (``validate`` leaves the
-    counts to the validator.)"""
+    """Read and check a policy file (version 3 or 2; 1 turned into a graph): the JSON against
+    the format's schema first (:func:`check_schema`: nothing reads a field before its shape is
+    known), then :meth:`Policy.load`, then the type of every field the tools read and
+    (``counts``) whether the header's counts and the moves' agents match the graph, so a
+    hand-edited or truncated file is one :class:`InputError` line instead of a wrong display
+    or a crash. (``validate`` leaves the counts to the validator.)"""
+    check_schema(path)
     try:
         policy = Policy.load(path)
     except (AttributeError, TypeError, KeyError, ValueError, IndexError, RecursionError) as e:
@@ -31,6 +38,62 @@ def read_policy(path: Path | str, *, counts: bool = True) -> Policy:
         raise InputError(str(path), place, what, POLICY_FIX) from None
     check_policy(policy, str(path), counts=counts)
     return policy
+
+
+SCHEMA = "policy.schema.json"
+"""The JSON Schema of policy format versions 2 and 3, shipped beside this module."""
+
+
+@cache
+def _schema_check() -> Callable[[Any], Any]:
+    """Return the compiled check of :data:`SCHEMA` (compiled once per process)."""
+    schema = json.loads(resources.files(__package__).joinpath(SCHEMA).read_text("utf-8"))
+    return cast(Callable[[Any], Any], fastjsonschema.compile(schema))
+
+
+_SAY = {f"must be {kind}": f"must be {say}" for kind, say in [
+    ("integer", "a whole number"), ("number", "a number"), ("string", "a string"),
+    ("boolean", "true or false"), ("array", "a list"), ("object", "an object"),
+    ("number or null", "a number or null"), ("string or null", "a string or null")]}
+"""The schema checker's words for a type, in the words of the other policy errors."""
+
+
+def _no_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not a number JSON allows")
+
+
+def check_schema(path: Path | str) -> None:
+    """Raise :class:`InputError` unless the file at ``path`` is JSON (``NaN`` and
+    ``Infinity`` refused) whose object matches the policy format's schema (versions 2 and 3;
+    a version 1 file, which the schema does not describe, is left to :meth:`Policy.load`).
+    The error names the first field that does not match, e.g. ``p.json:objective: must be
+    object``. A file that cannot be read or parsed is left to :meth:`Policy.load` too, which
+    says so in its own words."""
+    name = str(path)
+    try:
+        raw = json.loads(Path(path).read_text(encoding="utf-8"), parse_constant=_no_constant)
+    except ValueError as e:
+        if "JSON allows" in str(e):
+            raise InputError(name, "", str(e), POLICY_FIX) from None
+        return
+    except (OSError, RecursionError):
+        return
+    if not isinstance(raw, dict) or raw.get("version") not in (2, 3) or isinstance(
+            raw.get("version"), bool):
+        return
+    try:
+        _schema_check()(raw)
+    except fastjsonschema.JsonSchemaValueException as e:
+        where = str(e.name or "data")
+        place = where[len("data."):] if where.startswith("data.") else ""
+        what = str(e.message)
+        if what.startswith(where + " "):
+            what = what[len(where) + 1:]
+        what = _SAY.get(what, what)
+        raise InputError(name, place, what[:200], POLICY_FIX + " (the file does not match "
+                         "the format's schema: see docs/policy-format.md)") from None
+    except RecursionError:
+        raise InputError(name, "", "nested too deeply for a policy", POLICY_FIX) from None
 
 
 def _shape(path: Path | str) -> tuple[str, str] | None:
@@ -136,4 +199,4 @@ def check_policy_problem(policy: Policy, policy_path: Path | str, problem: Probl
                              f"{problem.source} --out {policy_path})")
 
 
-__all__ = ["check_policy", "check_policy_problem", "read_policy"]
+__all__ = ["SCHEMA", "check_policy", "check_policy_problem", "check_schema", "read_policy"]
