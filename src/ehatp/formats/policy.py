@@ -235,6 +235,11 @@ class Policy:
         """The format version this policy is written in."""
         return VERSION_LIFTED if self.symmetry is not None else VERSION
 
+    def __repr__(self) -> str:
+        """Return a one-line summary (the whole graph is :meth:`to_json`)."""
+        return (f"Policy({self.problem!r}, domain={self.domain!r}, version={self.version}, "
+                f"nodes={len(self.nodes)}, leaves={self.leaves}, cost={self.cost!r})")
+
     # -- the graph ----------------------------------------------------------------------------
 
     @property

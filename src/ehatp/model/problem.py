@@ -85,6 +85,12 @@ class Problem:
     # one-line notes for the user, e.g. a deprecated spelling in the file
     notes: tuple[str, ...] = ()
 
+    def __repr__(self) -> str:
+        """Return a one-line summary: name, domain, objects, K and the file it came from."""
+        n = sum(len(v) for v in self.objects.values())
+        return (f"Problem({self.name!r}, domain={self.domain.name!r}, objects={n}, "
+                f"K={self.K}, source={self.source!r})")
+
     def all_objects(self) -> dict[str, list[str]]:
         """Objects by type, domain constants included, each list sorted by name; a type's
         list holds its subtypes' objects too."""

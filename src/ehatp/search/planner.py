@@ -40,6 +40,15 @@ class Result:
     def solved(self) -> bool:
         return self.policy is not None
 
+    def __repr__(self) -> str:
+        """Return a one-line summary: status, the policy's, the search's size and time."""
+        st = self.stats
+        size = f", distinct={st['distinct']}" if "distinct" in st else ""
+        took = f", time_ms={st['time_ms']:.1f}" if "time_ms" in st else ""
+        why = f", reason={self.reason!r:.80}" if self.reason else ""
+        return (f"Result(status={str(self.status)!r}, optimal={self.optimal}, "
+                f"policy={self.policy!r}{size}{took}{why})")
+
 
 @dataclass(frozen=True)
 class _Settings:
