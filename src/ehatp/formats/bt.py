@@ -24,6 +24,7 @@ runnable py_trees behaviours live in :mod:`ehatp.formats.bt_py_trees` (``ehatp[b
 
 from __future__ import annotations
 
+import re
 from enum import StrEnum
 from typing import TYPE_CHECKING, Any
 from xml.sax.saxutils import escape
@@ -211,8 +212,32 @@ def answers_of(problem: Problem, policy: Policy) -> dict[tuple[int, str], bool]:
 # --------------------------------------------------------------------------- BehaviorTree.CPP
 
 
+# XML 1.0 has no way to write these characters, not even as a character reference
+_NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ufffe\uffff]")
+
+
+def _xml_safe(v: str) -> str:
+    """Return ``v``; raise :class:`ValueError` when it holds a character XML cannot carry (a
+    problem or policy file with one is refused when it is read)."""
+    if (m := _NOT_XML.search(v)) is not None:
+        raise ValueError(f"{v!r} holds the control character {m.group()!r}, which XML cannot "
+                         "carry; remove it from the name")
+    return v
+
+
 def _attr(v: str) -> str:
-    return '"' + escape(v, {'"': "&quot;"}) + '"'
+    """Return ``v`` as a quoted XML attribute value that parses back to ``v`` exactly: markup
+    characters and quotes as entities, and newlines and tabs as character references (an
+    XML reader turns them into spaces otherwise)."""
+    return '"' + escape(_xml_safe(v), {'"': "&quot;", "\n": "&#10;", "\r": "&#13;",
+                                        "\t": "&#9;"}) + '"'
+
+
+def _comment(text: str) -> str:
+    """Return ``text`` as an XML comment: an XML comment may hold no ``--`` and may not end
+    with ``-``, so a space goes between two dashes and after the last one."""
+    body = re.sub(r"-(?=-|$)", "- ", escape(_xml_safe(text)))
+    return f"<!-- {body} -->"
 
 
 def _write(node: BTNode, depth: int, out: list[str]) -> None:
@@ -233,10 +258,9 @@ def to_btcpp(forest: Forest) -> str:
     p = forest.policy
     out = ['<?xml version="1.0" encoding="UTF-8"?>',
            f'<root BTCPP_format="4" main_tree_to_execute={_attr(forest.main)}>',
-           "  <!-- " + escape(f"ehatp policy for {p.problem} ({p.domain}): robot "
-                              f"{p.agents['robot']}, human {p.agents['human']}, cost {p.cost}, "
-                              f"{len(p.nodes)} nodes; written by ehatp export bt")
-           .replace("--", "- -") + " -->"]
+           "  " + _comment(f"ehatp policy for {p.problem} ({p.domain}): robot "
+                           f"{p.agents['robot']}, human {p.agents['human']}, cost {p.cost}, "
+                           f"{len(p.nodes)} nodes; written by ehatp export bt")]
     for tid, root in forest.trees.items():
         out.append(f"  <BehaviorTree ID={_attr(tid)}>")
         _write(root, 2, out)
@@ -244,7 +268,7 @@ def to_btcpp(forest: Forest) -> str:
     out.append("  <TreeNodesModel>")
     for kind, nid, desc, ports in CUSTOM_NODES:
         out.append(f"    <{kind} ID={_attr(nid)}>")
-        out.append(f"      <!-- {escape(desc)} -->")
+        out.append(f"      {_comment(desc)}")
         for direction, name, pdesc in ports:
             out.append(f"      <{direction}_port name={_attr(name)}>{escape(pdesc)}"
                        f"</{direction}_port>")
@@ -280,7 +304,9 @@ def build_py_tree(policy: Policy, *, robot: RobotFn, human: HumanFn,
 
 
 def _py(v: str) -> str:
-    return repr(v)
+    """Return ``v`` as a Python string literal (``repr`` escapes quotes, backslashes, control
+    and line-separating characters)."""
+    return repr(str(v))
 
 
 def _expr(node: BTNode, depth: int, out: list[str], choices: list[BTNode] | None = None) -> None:
@@ -315,9 +341,14 @@ def _expr(node: BTNode, depth: int, out: list[str], choices: list[BTNode] | None
 
 def to_py_trees_source(forest: Forest) -> str:
     """A Python module whose ``make_tree(robot, human, ...)`` builds the same behaviours as
-    :func:`build_py_tree` (with ``ehatp[bt]`` installed)."""
+    :func:`build_py_tree` (with ``ehatp[bt]`` installed). Every string of the policy is in the
+    module as a Python literal (``repr``), never in a docstring or a comment: a module written
+    for any policy file runs nothing but the tree's construction when imported. The policy's
+    header is the module's ``POLICY`` dict."""
     p = forest.policy
-    out = [f'"""Behaviour tree of the ehatp policy for {p.problem} ({p.domain}), for py_trees.',
+    header = {"problem": p.problem, "domain": p.domain, "robot": p.agents["robot"],
+              "human": p.agents["human"], "cost": str(p.cost)}
+    out = ['"""Behaviour tree of an ehatp policy (its header: ``POLICY``), for py_trees.',
            "",
            "Written by `ehatp export bt --format py_trees`; needs ehatp[bt]. Build it with",
            "``make_tree(robot, human)`` and tick it (see docs/behaviour-trees.md).",
@@ -329,11 +360,12 @@ def to_py_trees_source(forest: Forest) -> str:
            "from ehatp.formats.bt_py_trees import (",
            "    GoalReached, HumanDid, HumanFn, Interface, OnGoal, OnUncovered, ReportUncovered,",
            "    RobotAction, RobotFn, RobotWait, Say, Silence, SubTree, WaitHumanAction,",
-           ")", "", "",
+           ")", "",
+           "POLICY = {" + ", ".join(f"{_py(k)}: {_py(v)}" for k, v in header.items()) + "}",
+           "", "",
            "def make_tree(robot: RobotFn, human: HumanFn, on_goal: OnGoal | None = None,",
            "              on_uncovered: OnUncovered | None = None) -> Behaviour:",
-           f'    """The tree of policy {p.problem!r}: robot {p.agents["robot"]}, human '
-           f'{p.agents["human"]}, cost {p.cost}."""',
+           '    """Return the tree of the policy ``POLICY`` describes."""',
            "    io = Interface(robot, human, on_goal, on_uncovered)"]
 
     def function(name: str, root: BTNode) -> None:

@@ -31,7 +31,7 @@ from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..errors import DotMissing
+from ..errors import DotMissing, printable
 from .lifted import expanded
 from .policy import COMM_KINDS, Policy, PolicyMove, PolicyNode
 from .policy_check import read_policy
@@ -181,8 +181,12 @@ _START_STYLE = {"shape": "box", "style": "rounded,filled,bold", "fillcolor": "#e
 
 
 def _dot_text(s: str) -> str:
-    # the graphviz package quotes values but leaves backslashes for dot to interpret
-    return s.replace("\\", "\\\\")
+    """Return ``s`` for a DOT string that dot shows as written: control characters as their
+    Python escapes, then backslashes and quotes escaped, so that neither dot's label escapes
+    (``\\N``, ``\\l``, ...) nor a quote in a name can change the drawing, and ``&`` as
+    ``&amp;`` (dot reads entities in every string). (:func:`to_dot` also marks every value as
+    not HTML-like, so that ``<...>`` stays text.)"""
+    return printable(s).replace("\\", "\\\\").replace('"', '\\"').replace("&", "&amp;")
 
 
 def worlds_text(n: PolicyNode) -> str:
@@ -260,15 +264,16 @@ def to_dot(policy: Policy, view: View | None = None) -> graphviz.Digraph:
              f"{policy.leaves} branches, {policy.communications} communication(s); "
              f"{len(policy.nodes)} nodes")
     label = "\\l".join(_dot_text(x) for x in [title, *(f"collapsed: {t}" for t in view.notes)])
+    text = graphviz.nohtml  # every value is text: "<b>x</b>" is not an HTML-like label
     g = graphviz.Digraph(name=re.sub(r"\W", "_", policy.problem) or "policy")
-    g.attr(rankdir="TB", labelloc="t", labeljust="l", label=label + "\\l",
+    g.attr(rankdir="TB", labelloc="t", labeljust="l", label=text(label + "\\l"),
            fontname="Helvetica", fontsize="12")
     g.attr("node", fontname="Helvetica", fontsize="10", margin="0.08,0.04")
     g.attr("edge", color="#666666", arrowsize="0.6", fontname="Helvetica", fontsize="9")
     into = view.entering
     for i in view.nodes:
-        g.node(f"n{i}", **node_attrs(policy, policy.nodes[i], into.get(i, []),
-                                     view.stands_for.get(i, 1)))
+        shown = node_attrs(policy, policy.nodes[i], into.get(i, []), view.stands_for.get(i, 1))
+        g.node(f"n{i}", **{k: text(v) for k, v in shown.items()})
         if i in view.folded:
             g.node(f"more{i}", label=f"… {view.folded[i]} more", shape="note",
                    style="dashed", color="#888888", fontcolor="#555555")
@@ -280,7 +285,7 @@ def to_dot(policy: Policy, view: View | None = None) -> graphviz.Digraph:
         if m.agent == human:  # human moves are the uncontrollable branches: dashed, orange
             attrs.update(style="dashed", color="#a35200")
         if entry_move(into.get(b, [])) is None:
-            attrs["label"] = _dot_text(m.action)
+            attrs["label"] = text(_dot_text(m.action))
         g.edge(f"n{a}", f"n{b}", **attrs)
     return g
 
@@ -329,7 +334,7 @@ def to_html(policy: Policy, *, max_depth: int | None = None,
     parts = {
         # entities for ":" and "/" keep a URL-like problem name from reading as a link
         "title": html_escape(f"{policy.problem} — ehatp policy").replace(":", "&#58;")
-        .replace("/", "&#47;"),
+        .replace("/", "&#47;").replace("\u2028", "&#8232;").replace("\u2029", "&#8233;"),
         "css": _asset("explorer.css"),
         "js": _asset("explorer.js"),
         "policy_json": _script_json(data),
