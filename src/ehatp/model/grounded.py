@@ -64,6 +64,15 @@ class GModel:
     # grounded on demand: a task reached but not yet grounded is grounded when one of the
     # three tables is first asked about it; the tables then hold only what was asked for
     lazy: bool = False
+    # on demand, the tasks reached but not yet grounded (asking a table about one grounds
+    # it); None when the model was grounded whole
+    pending: set[int] | None = None
+    asked: int = 0  # how many tasks were grounded on demand so far
+
+
+    def ready(self, t: int) -> bool:
+        """Whether asking the tables about task ``t`` grounds nothing (§1, "Grounding")."""
+        return self.pending is None or t not in self.pending
 
 
 @dataclass(eq=False)

@@ -587,6 +587,7 @@ class _ModelGrounding:
         self.todo = []
         g = self.g
         g.lazy = True
+        g.pending = pending
         g.ops = _OnDemand(g.ops, pending, self.ask)
         g.methods = _OnDemand(g.methods, pending, self.ask)
         g.done = _OnDemand(g.done, pending, self.ask)
@@ -596,6 +597,7 @@ class _ModelGrounding:
         self.one(t)
         assert self.pending is not None
         self.pending.discard(t)
+        self.g.asked += 1
 
     def bindings(self, method: Method, tb: dict[Var, str]) -> Iterator[tuple[str, ...]]:
         """§1: the bindings of ``m``'s own parameters, in the order of the product of their

@@ -20,7 +20,7 @@ from itertools import permutations, product
 from math import factorial
 
 from ..errors import DomainError
-from .formula import Formula, StateFn, negate
+from .formula import FALSE, Formula, StateFn, negate
 from .grounded import FINISH, GModel, bits, no_check
 
 MAX_DECOMPOSITION = 64
@@ -63,6 +63,7 @@ class Block(tuple[tuple[int, int], ...]):
 
 Item = int | Block
 Agenda = tuple[Item, ...]
+Bodies = tuple[tuple[StateFn, Formula, Agenda], ...]  # a task's methods: pre, its formula, body
 Option = tuple[int, Agenda]  # (ground action id or FINISH, remaining agenda)
 Members = list[tuple[int, int]]  # (task id, predecessor mask over the list's positions)
 
@@ -377,8 +378,24 @@ class Networks:
                 + "}")
 
 
+_NONE = -(1 << 30)
+"""A depth no refinement reaches: "no method applied" or "cannot finish" in :class:`Entry`."""
+
+Entry = tuple[tuple[Option, ...], int, int]
+"""What :meth:`Refiner.refine` keeps of an agenda in a state: its options, the deepest nesting
+of methods a refinement checks against the limit, and the deepest nesting at which it finishes
+(:data:`_NONE` for none), counted from the agenda itself."""
+
+
 class Refiner:
-    """Refinement with memoisation: results depend only on (agenda, state(s))."""
+    """Refinement with memoisation: results depend only on (agenda, state(s)).
+
+    An agenda of several items is refined by splicing (§1, "Refinement"): the first item's
+    refinement in the state, each remaining agenda followed by the rest, and -- when the first
+    item can finish without an action -- the rest's own refinement. The first item's part is
+    kept on its own, so a state met with many agendas that start alike refines their common
+    first task once (:meth:`_entry`).
+    """
 
     def __init__(self, model: GModel, task_names: list[str],
                  max_decomposition: int = MAX_DECOMPOSITION,
@@ -387,10 +404,22 @@ class Refiner:
         self.task_names = task_names
         self.limit = max_decomposition
         self.net = networks or Networks(task_names)
-        self._one: dict[tuple[Agenda, int], tuple[Option, ...]] = {}
+        self._one: dict[tuple[Agenda, int], Entry] = {}
+        # while one item is refined alone (:meth:`_unit`): its options' set, the agenda to
+        # refine when it first finishes (None: none, or done), and the deepest nesting met
+        self._top: set[Option] | None = None
+        self._then: tuple[Agenda, int] | None = None
+        self._deep = self._fin = _NONE
         self._all: dict[tuple[Agenda, tuple[int, ...]], tuple[Uncertain, ...]] = {}
         # the subtasks of each method as an agenda (partially ordered ones in canonical form)
         self._bodies: dict[int, tuple[tuple[StateFn, Formula, Agenda], ...]] = {}
+        # tasks that give nothing in any state (:meth:`_dead`): task -> the deepest nesting
+        # the rule's walk checks inside it; None: a task that may give something
+        self._reach: dict[int, int | None] = {}
+        # each task's methods without those that start with such a task, and how deep the
+        # walk of those left out goes (_NONE: none left out); the model's count of tasks
+        # grounded on demand when that was found (-1: final, nothing left to ground)
+        self._kept: dict[int, tuple[Bodies, int, int]] = {}
         # called now and then while refining (a time or memory limit may raise from it)
         self.check: Callable[[], None] = no_check
         self._steps = 0
@@ -401,6 +430,87 @@ class Refiner:
         r = self._bodies[t] = tuple((me.pre, me.pre_f, self.net.body(me.subtasks, me.order))
                                     for me in self.model.methods.get(t, ()))
         return r
+
+    def _dead(self, u: int, path: set[int]) -> tuple[int | None, bool]:
+        """§1: whether task ``u`` gives nothing -- no option, not even ``FINISH`` -- in every
+        state, whatever is refined around it; with whether the answer is final. Such a task
+        is an operator whose precondition folded to false, or an abstract task with neither a
+        done-condition nor a method whose first subtask may give something (a partially
+        ordered body counts as one that may). If so, the answer is the deepest nesting of
+        methods, counted from ``u``, at which the rule's walk checks the limit inside it
+        (:data:`_NONE` for an operator): that walk is what leaving ``u`` out skips, so it is
+        left out only where it could not have gone past the limit::
+
+            dead(u):  # path: the tasks being looked at (met again: a loop, may give)
+              operator: pre is false and no done-condition -> _NONE, else may give
+              abstract: a done-condition -> may give
+                        for each method m: body empty or a block, or dead(first(m)) may give
+                          -> may give
+                        -> max(0, max over m of 1 + dead(first(m)))
+
+        Not final while a task it reads is still to be ground on demand (reading it would
+        ground it, and grounding order is part of the result, §1 "Grounding")."""
+        r = self._reach.get(u, 0)
+        if r != 0 or u in self._reach:
+            return r, True
+        model = self.model
+        if not model.ready(u):
+            return None, False
+        if u in path:  # a loop: may give, as far as this tells
+            return None, True
+        op = model.ops.get(u)
+        if op is not None:
+            r = _NONE if op.done is None and op.pre_f == FALSE else None
+        elif u in model.done:
+            r = None
+        else:
+            path.add(u)
+            r, final = 0, True
+            for _, _, body in self._bodies.get(u) or self._body(u):
+                e, fin = (None, True) if not body or isinstance(body[0], Block) \
+                    else self._dead(body[0], path)
+                if e is None and fin:  # a method that may give: so may u
+                    r, final = None, True
+                    break
+                if e is None:  # not known yet
+                    r, final = None, False
+                elif r is not None:
+                    r = max(r, 1 + e)
+            path.discard(u)
+            if not final:
+                return None, False
+        self._reach[u] = r
+        return r, True
+
+    def _methods(self, t: int, depth: int) -> Bodies:
+        """§1: the methods of task ``t`` whose refinement at nesting ``depth`` may give
+        something: those that start with a task that gives nothing in any state
+        (:meth:`_dead`) are left out, unless the walk inside them could go past the nesting
+        limit from there (then the rule's walk is kept, and raises where it did)."""
+        k = self._kept.get(t)
+        model = self.model
+        if k is None or (k[2] >= 0 and k[2] != model.asked):
+            bodies = self._bodies.get(t) or self._body(t)
+            keep: list[tuple[StateFn, Formula, Agenda]] = []
+            reach, final = _NONE, True
+            for m in bodies:
+                body = m[2]
+                if body and not isinstance(body[0], Block):
+                    e, fin = self._dead(body[0], set())
+                    final = final and fin
+                    if e is not None:
+                        reach = max(reach, 1 + e)
+                        continue
+                keep.append(m)
+            k = (tuple(keep) if reach > _NONE else bodies, reach, -1 if final else model.asked)
+            self._kept[t] = k
+        if k[1] > _NONE:
+            deep = depth + k[1]
+            if deep > self.limit:
+                return self._bodies[t]
+            if deep > self._deep:
+                self._deep = deep
+        return k[0]
 
     def _endless(self, t: Item, open_: Open = ()) -> DomainError:
         """The error for a refinement nested deeper than the limit, naming the outermost task
@@ -423,13 +533,92 @@ class Refiner:
         """§1 (Refinement): the (first primitive action, remaining agenda) pairs of ``agenda``
         in the single state ``s``; ``(FINISH, ())`` when it can be completed. A task this model
         does not know gives nothing (the agent is blocked on it)."""
+        e = self._one.get((agenda, s))
+        if e is None:
+            try:
+                e = self._entry(agenda, s)
+            except DomainError:
+                e = None
+            if e is None or e[1] > self.limit:
+                # §1: nested too deep somewhere: the rule as written, on the whole agenda,
+                # says where (the same error, naming the same task, as without splicing)
+                out: set[Option] = set()
+                self._deep = _NONE
+                self._go(agenda, s, out, 0)
+                return tuple(sorted(out))  # pragma: no cover - the line above raises
+        return e[0]
+
+    def _entry(self, agenda: Agenda, s: int) -> Entry:
+        """§1 (Refinement), spliced: ``agenda``'s options in ``s`` with the depths of
+        :data:`Entry`, the refinement of its first item reused across every rest::
+
+            entry(agenda, s):
+              if agenda is empty: return ({FINISH}, none, 0)
+              head = entry((agenda[0],), s)        # alone: _go with no task open around it
+              out = {(a, r + rest) for (a, r) in head if a != FINISH}
+              if FINISH in head:                    # the first item can end without an action
+                  tail = entry(rest, s)
+                  out |= tail;  deep = max(head.deep, head.fin + tail.deep)
+              return sorted(out), deep, head.fin + tail.fin
+
+        This is the rule itself: a task opened inside the first item is closed again once the
+        agenda is back to ``rest`` (:data:`Open`: its length is counted from the end), so
+        ``rest`` is refined as if it came first; only the nesting depth carries on, hence the
+        depths kept, which :meth:`refine` compares with the limit. When the first item is
+        refined for the first time, ``rest`` is refined at the moment the item first
+        finishes, as the rule written as one walk does, so that a model grounded on demand
+        meets its tasks in the same order (§1, "Grounding": task ids follow that order)."""
         key = (agenda, s)
-        r = self._one.get(key)
-        if r is None:
+        e = self._one.get(key)
+        if e is not None:
+            return e
+        if not agenda:
+            e = ((FINISH, ()),), _NONE, 0
+        elif len(agenda) == 1:
+            e = self._unit(agenda[0], s, ())
+        else:
+            first, rest = agenda[:1], agenda[1:]
+            head = self._one.get((first, s))
+            if head is None:
+                head = self._one[(first, s)] = self._unit(agenda[0], s, rest)
             out: set[Option] = set()
-            self._go(agenda, s, out, 0)
-            r = self._one[key] = tuple(sorted(out))
-        return r
+            finishes = False
+            for a, r in head[0]:
+                if a == FINISH:
+                    finishes = True
+                else:
+                    out.add((a, r + rest))
+            if finishes:
+                tail = self._entry(rest, s)
+                out.update(tail[0])
+                e = (tuple(sorted(out)), max(head[1], head[2] + tail[1]), head[2] + tail[2])
+            else:
+                e = tuple(sorted(out)), head[1], _NONE
+        self._one[key] = e
+        return e
+
+    def _unit(self, item: Item, s: int, then: Agenda) -> Entry:
+        """§1: the refinement of the agenda ``(item,)`` in ``s``, with its depths; ``then``
+        (non-empty) is refined, through :meth:`_entry`, when the item first finishes."""
+        saved = self._top, self._then, self._deep, self._fin
+        out: set[Option] = set()
+        self._top, self._then, self._deep, self._fin = out, (then, s) if then else None, \
+            _NONE, _NONE
+        try:
+            self._go((item,), s, out, 0)
+            return tuple(sorted(out)), self._deep, self._fin
+        finally:
+            self._top, self._then, self._deep, self._fin = saved
+
+    def _finished(self, depth: int) -> None:
+        """The item refined alone (:meth:`_unit`) finished at nesting ``depth``: note it, and
+        refine what follows it the first time."""
+        if depth > self._fin:
+            self._fin = depth
+        then = self._then
+        if then is not None:
+            self._then = None
+            self._entry(*then)
 
     def refine_to(self, agenda: Agenda, s: int, op: int) -> tuple[Option, ...]:
         """§1: the refinements of ``agenda`` in ``s`` whose first action is ``op`` (those of
@@ -446,6 +635,8 @@ class Refiner:
         while True:
             if not agenda:
                 out.add((FINISH, ()))
+                if out is self._top:
+                    self._finished(depth)
                 return
             t = agenda[0]
             if isinstance(t, Block):
@@ -469,15 +660,17 @@ class Refiner:
             open_ = _still_open(open_, n)
             if any(u == t for u, _ in open_):
                 return  # §1: refined again inside its own refinement: a loop, closed
-        if depth > self.limit:
-            raise self._endless(t, open_)
+        if depth > self._deep:
+            self._deep = depth
+            if depth > self.limit:
+                raise self._endless(t, open_)
         self._steps += 1
         if not self._steps & 1023:
             self.check()
         rest = agenda[1:]
         inner = (*open_, (t, n - 1))
         # a task this model does not know gives nothing: the agent is blocked on it
-        for pre, _, body in self._bodies.get(t) or self._body(t):
+        for pre, _, body in self._methods(t, depth):
             if pre(s):
                 self._go(body + rest, s, out, depth + 1, inner)
 
@@ -494,8 +687,10 @@ class Refiner:
                 if d is not None and d[1](s):
                     self._go(net.without(b, i) + rest, s, out, depth, open_)
                     return
-        if depth > self.limit:
-            raise self._endless(b)
+        if depth > self._deep:
+            self._deep = depth
+            if depth > self.limit:
+                raise self._endless(b)
         for i, (t, preds) in enumerate(b):
             if preds:
                 continue
@@ -571,7 +766,7 @@ class Refiner:
         if depth > self.limit:
             raise self._endless(t, open_)
         inner = (*open_, (t, n - 1))
-        for pre, pre_f, body in self._bodies.get(t) or self._body(t):
+        for pre, pre_f, body in self._methods(t, depth):
             mw = _holds(pre, states, ws)
             if mw:
                 self._go_all(body + rest, states, mw, _add(conds, pre_f, mw != ws), out,

@@ -1,0 +1,127 @@
+"""Where symmetry does not help (issue 17 §4): two checkouts side by side, run by run.
+
+    .venv/bin/python benchmarks/speed_core.py --versus DIR [--repeat N] [--only NAME ...]
+        [--validate] [--keep DIR]
+
+Targets: ``cubes-c8-b2-opaque-k2`` solved with ``--no-symmetry``, and the IPC 2020 HTN
+track's ``to-Woodworking`` (HDDL, the robot alone, as ``benchmarks/hddl_report.py`` imports it;
+needs unified-planning). Every run is a fresh process (``python -c``, the checkout's ``src``
+first on ``sys.path``): import, ground, solve, write the policy JSON, and with ``--validate``
+validate it too. ``DIR`` (another checkout, e.g. a ``git worktree`` of an older commit) and
+this one alternate run by run, so that a shared machine's drift falls on both alike.
+
+Prints, per target and checkout, the medians of the whole process's CPU time (user + system,
+start-up included) and its peak resident memory (``ru_maxrss`` of the child), the states,
+and whether the two policies' JSON are byte-identical (their SHA-256). ``--keep DIR`` writes
+the policies there. Timing lives here, never in the unit tests.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parent.parent
+
+CHILD = r"""
+import json, sys
+sys.path.insert(0, sys.argv[1])
+target, out, validate = sys.argv[2], sys.argv[3], sys.argv[4] == "1"
+if target == "woodworking":
+    from ehatp.experiments.hddl_report import domains_shipped
+    from ehatp.formats.hddl import import_hddl
+    from ehatp.formats.hddl_sidecar import Sidecar
+    _, dom, prob = next(d for d in domains_shipped() if d[0].endswith("to-Woodworking"))
+    problem = import_hddl(dom, prob, sidecar=Sidecar(expects="nothing")).problem()
+    kw = {}
+else:
+    import ehatp
+    from ehatp.experiments import bench
+    point = bench.select_points(None, [target], False)[0]
+    path = out + ".toml"
+    with open(path, "w", encoding="utf-8") as f:
+        f.write(point.toml())
+    problem = ehatp.load(path)
+    kw = {"symmetry": False}
+from ehatp.search.planner import solve
+r = solve(problem, timeout=3600, **kw)
+text = r.policy.to_json() if r.policy is not None else ""
+with open(out, "w", encoding="utf-8") as f:
+    f.write(text)
+ok = None
+if validate and r.policy is not None:
+    from ehatp.check.validator import validate as check
+    ok = check(problem, r.policy).ok
+print(json.dumps({"status": r.status, "distinct": r.stats.get("distinct"),
+                  "cost": None if r.policy is None else str(r.policy.cost), "valid": ok}))
+"""
+
+TARGETS = {"cubes-c8-b2-opaque-k2": "cubes-c8-b2-opaque-k2 --no-symmetry",
+           "woodworking": "IPC 2020 to-Woodworking, the robot alone"}
+
+
+def run(src: str, target: str, out: Path, validate: bool) -> dict[str, Any]:
+    """One fresh process: its row (CPU s, peak MB, what it printed, the policy's hash)."""
+    proc = subprocess.Popen(
+        [sys.executable, "-c", CHILD, src, target, str(out), "1" if validate else "0"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    _, status, usage = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    stdout = proc.stdout.read() if proc.stdout else ""
+    stderr = proc.stderr.read() if proc.stderr else ""
+    if proc.returncode != 0:
+        raise SystemExit(f"{target} with {src} failed (exit {proc.returncode}):\n{stderr}")
+    row: dict[str, Any] = json.loads(stdout.strip().splitlines()[-1])
+    row["cpu_s"] = usage.ru_utime + usage.ru_stime
+    row["peak_mb"] = usage.ru_maxrss / 1024
+    row["sha256"] = hashlib.sha256(out.read_bytes()).hexdigest()
+    return row
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--versus", required=True, metavar="DIR",
+                    help="the other checkout (its src/ is timed)")
+    ap.add_argument("--repeat", "-n", type=int, default=3, metavar="N",
+                    help="runs per target and checkout; medians (default 3)")
+    ap.add_argument("--only", action="append", choices=sorted(TARGETS), metavar="NAME",
+                    help=f"one of {', '.join(TARGETS)} (repeatable; default both)")
+    ap.add_argument("--validate", action="store_true", help="validate each policy too")
+    ap.add_argument("--keep", type=Path, metavar="DIR", help="write the policies there")
+    args = ap.parse_args(argv)
+    srcs = {"before": str(Path(args.versus).resolve() / "src"), "after": str(ROOT / "src")}
+    keep = args.keep or Path(tempfile.mkdtemp(prefix="speed-core-"))
+    keep.mkdir(parents=True, exist_ok=True)
+    print("target                                    | checkout | CPU s (runs)        | "
+          "peak MB | states  | cost | valid")
+    same = True
+    for target in args.only or list(TARGETS):
+        rows: dict[str, list[dict[str, Any]]] = {"before": [], "after": []}
+        for _ in range(args.repeat):
+            for label, src in srcs.items():
+                rows[label].append(run(src, target, keep / f"{target}-{label}.json",
+                                       args.validate))
+        cpu = {k: statistics.median(r["cpu_s"] for r in v) for k, v in rows.items()}
+        for label, rs in rows.items():
+            runs = " ".join(f"{r['cpu_s']:.2f}" for r in rs)
+            print(f"{TARGETS[target][:41]:41s} | {label:8s} | {cpu[label]:6.2f} ({runs}) | "
+                  f"{statistics.median(r['peak_mb'] for r in rs):7.0f} | "
+                  f"{rs[-1]['distinct']:7,} | {rs[-1]['cost']:>4} | {rs[-1]['valid']}")
+        hashes = {r["sha256"] for rs in rows.values() for r in rs}
+        same = same and len(hashes) == 1
+        print(f"  speed-up {cpu['before'] / cpu['after']:.2f}x; policy JSON "
+              f"{'byte-identical' if len(hashes) == 1 else 'DIFFERS'} "
+              f"({len(hashes)} distinct hash{'es' if len(hashes) > 1 else ''})", flush=True)
+    return 0 if same else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
