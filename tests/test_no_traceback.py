@@ -330,7 +330,8 @@ def test_a_problem_file_cannot_call_os_mkdir(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(("ref", "code", "expect"), [
-    ("ehatp.formats.problem_toml:load", None, "neither a Domain nor a function marked"),
+    ("ehatp.formats.problem_toml:load", None, "declared no domain, so it is not imported"),
+    ("ehatp.domains.cubes:REGISTRY_OF_NOTHING", None, "has no attribute"),
     ("mydomain.py:make", "def make():\n    open('CALLED', 'w')\n",
      "neither a Domain nor a function marked"),
     ("../mydomain.py:domain", None, "not inside the problem file's folder"),

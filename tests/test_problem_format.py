@@ -44,7 +44,7 @@ def test_the_shipped_instance_loads(tmp_path: Path) -> None:
     ("K = 2", 'K = "two"', "K must be a whole number"),
     ('starts = "human"', 'starts = "alice"', "unknown agent 'alice'"),
     ('name = "cubes"', 'name = "cubez"', "unknown domain 'cubez'"),
-    ('name = "cubes"', 'name = "no.such.module:dom"', "cannot import"),
+    ('name = "cubes"', 'name = "no.such.module:dom"', "declared no domain"),
     ("turn_before_move = false", "turn_before_mov = false", "bad domain options"),
     ('box = ["box1", "box2"]', 'box = ["box1", "box1"]', "declared twice"),
     ('box = ["box1", "box2"]', 'crate = ["box1"]', "unknown type 'crate'"),

@@ -47,14 +47,11 @@ from ..model.problem import (
     parse_size,
     show_value,
 )
+from ..model.registry import BUILTIN, HOW_TO_DECLARE, declared, declared_modules
 
-# Domain names usable in a problem's [domain] table; values are "module:attribute" so the model
-# layer does not import the domain library. These are trusted: their factories are called even
-# unmarked.
-REGISTRY: dict[str, str] = {
-    "cubes": "ehatp.domains.cubes:make_domain",
-    "cooking": "ehatp.domains.cooking:make_domain",
-}
+# ehatp's own domains by name ("module:attribute"; the model layer does not import the domain
+# library); every declared domain, these included, is in ehatp.model.registry
+REGISTRY: dict[str, str] = BUILTIN
 
 
 # --- the loader ------------------------------------------------------------------------------
@@ -530,35 +527,31 @@ def _beliefs(r: TomlReader, raw: Any, atom: Callable[[str, str], GroundAtom],
 
 # --- the domain a problem names --------------------------------------------------------------
 
-_DOMAIN_FORMS = ('a registered name ({known}), "file.py:attribute" (a Python file in the problem '
-                 'file\'s folder) or "package.module:attribute"')
+_DOMAIN_FORMS = ('a declared domain ({known}), "file.py:attribute" (a Python file in the problem '
+                 'file\'s folder) or "package.module:attribute" of a declared domain\'s module')
 _IDENT = re.compile(r"[A-Za-z_]\w*")
 _MODULE = re.compile(r"[A-Za-z_]\w*(\.[A-Za-z_]\w*)*")
 
 
 def _resolve_domain(r: TomlReader, t: Mapping[str, Any], base: Path) -> Domain:
-    """The domain ``[domain] name`` names. Problem files are data: this imports a domain
-    module (which runs it, as Python does), but calls nothing except a function marked with
+    """The domain ``[domain] name`` names. Problem files are data: a module is imported only
+    when it declared itself a domain (:mod:`ehatp.model.registry`) or is a ``.py`` file in the
+    problem's folder, and nothing is called except a declared target or a function marked with
     :func:`~ehatp.model.domain.domain_factory`."""
-    forms = _DOMAIN_FORMS.format(known=", ".join(sorted(REGISTRY)))
     ref = t.get("name")
     if ref is None:
+        forms = _DOMAIN_FORMS.format(known=", ".join(sorted(declared())))
         raise r.err("[domain] name", "missing domain name", f"write name = one of {forms}")
     ref = r.string("[domain] name", ref, 'name = "cubes"')
     options = {k: v for k, v in t.items() if k != "name"}
-    registered = ref in REGISTRY
-    target = REGISTRY.get(ref, ref)
-    mod_name, _, attr = target.rpartition(":")
-    if not mod_name or not _IDENT.fullmatch(attr):
-        raise r.err("[domain] name", f"unknown domain {ref!r}", f"use {forms}", ref)
+    mod_name, _, attr = ref.rpartition(":")
     files: set[str] = set()
-    if mod_name.endswith(".py"):
+    if mod_name.endswith(".py") and _IDENT.fullmatch(attr):  # the user's file: their code
         f = _domain_file(r, ref, mod_name, base)
         files.add(str(f))
-        module = _run_file(r, ref, f)
+        obj, trusted = getattr(_run_file(r, ref, f), attr, None), False
     else:
-        module = _import(r, ref, mod_name)
-    obj = getattr(module, attr, None)
+        obj, trusted = _declared(r, ref)
     if obj is None:
         raise r.err("[domain] name", f"{mod_name} has no attribute {attr!r}",
                     "name a Domain, or a function marked @domain_factory that returns one", ref)
@@ -567,7 +560,7 @@ def _resolve_domain(r: TomlReader, t: Mapping[str, Any], base: Path) -> Domain:
             raise r.err("[domain]", f"domain {ref!r} takes no options",
                         f"remove {', '.join(sorted(options))}")
         return obj
-    if not registered and not is_domain_factory(obj):
+    if not trusted and not is_domain_factory(obj):
         raise r.err("[domain] name", f"{ref!r} is neither a Domain nor a function marked as a "
                     "domain factory, and a problem file may not call anything else",
                     "name a Domain, or mark the function that builds it with "
@@ -585,6 +578,34 @@ def _resolve_domain(r: TomlReader, t: Mapping[str, Any], base: Path) -> Domain:
         raise r.err("[domain] name", f"{ref!r} gave {type(dom).__name__}, not a Domain",
                     "return a Domain from the factory")
     return dom
+
+
+def _declared(r: TomlReader, ref: str) -> tuple[Any, bool]:
+    """Return what the declared domain ``ref`` stands for, and whether it is trusted (a
+    declared target, called even unmarked): ``ref`` is a declared name, or
+    ``"module:attribute"`` of a module that a declared domain names. Anything else is refused
+    before any import, with the declared names and how to declare one."""
+    known = declared()
+    target, trusted = known.get(ref), True
+    if target is None:
+        mod_name, _, attr = ref.rpartition(":")
+        if not mod_name or not _IDENT.fullmatch(attr) or mod_name not in declared_modules(known):
+            what = (f"{ref!r} names a module that declared no domain, so it is not imported"
+                    if mod_name else f"unknown domain {ref!r}")
+            raise r.err("[domain] name", f"{what}; the declared domains are "
+                        f"{', '.join(sorted(known))}",
+                        'name one of them, a "file.py:attribute" in the problem\'s folder, or '
+                        f"a module:attribute of a declared domain's module; {HOW_TO_DECLARE}",
+                        ref)
+        target, trusted = ref, ref in known.values()
+    if not isinstance(target, str):  # registered from Python as an object
+        return target, True
+    mod_name, _, attr = target.rpartition(":")
+    obj = getattr(_import(r, ref, mod_name), attr, None)
+    if obj is None:
+        raise r.err("[domain] name", f"{mod_name} has no attribute {attr!r}",
+                    "name a Domain, or a function marked @domain_factory that returns one", ref)
+    return obj, trusted
 
 
 def _domain_file(r: TomlReader, ref: str, rel: str, base: Path) -> Path:
