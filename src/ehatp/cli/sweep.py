@@ -14,7 +14,7 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
-from ..errors import InputError
+from ..errors import InputError, printable
 from ..experiments.sweep import (
     ExecutorFailed,
     ExecutorKind,
@@ -263,8 +263,8 @@ def _report(rows: Sequence[Row], new: int, results: Path, csv_out: Path | None) 
     errors = [r for r in rows if r.get("status") == "error"]
     for r in errors[:5]:
         over = overrides_text(r.get("overrides") or {})
-        typer.echo(f"  error: {r.get('instance')}{' [' + over + ']' if over else ''}: "
-                   f"{r.get('error')}")
+        typer.echo(printable(f"  error: {r.get('instance')}{' [' + over + ']' if over else ''}: "
+                             f"{r.get('error')}"))
     if len(errors) > 5:
         typer.echo(f"  ... and {len(errors) - 5} more error rows (status \"error\" in "
                    f"{results})")
