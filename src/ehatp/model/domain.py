@@ -54,9 +54,11 @@ F = TypeVar("F", bound=Callable[..., Any])
 def domain_factory(fn: F) -> F:
     """Mark ``fn`` as a function that builds a :class:`Domain` from keyword options.
 
-    A problem file's ``[domain] name = "module:attribute"`` may only name a ``Domain`` or a
-    function marked so: problem files are data, and this keeps them from calling anything else.
-    Its other ``[domain]`` keys become ``fn``'s keyword arguments::
+    A problem file's ``[domain] name = "module:attribute"`` (a ``.py`` file beside it, or a
+    module that declared a domain: :mod:`ehatp.model.registry`) may only name a ``Domain``, a
+    declared domain's own target, or a function marked so: problem files are data, and this
+    keeps them from calling anything else. Its other ``[domain]`` keys become ``fn``'s keyword
+    arguments::
 
         @domain_factory
         def make_domain(variant: int = 1) -> Domain: ...
