@@ -328,3 +328,26 @@ def test_a_policy_file_holding_a_terminal_escape_code_is_refused_in_one_line(
         assert "\x1b" not in r.stderr + r.stdout and "\x07" not in r.stderr
         assert re.fullmatch(r"error: \S+:\d+:\d+: a string holds the control character "
                             r"'\\x1b'.*; remove it from the file\n", r.stderr), r.stderr
+
+
+def test_import_hddl_writes_hostile_sidecar_strings_as_data(tmp_path: Path) -> None:
+    pytest.importorskip("unified_planning", reason="unified-planning is not installed "
+                                                   "(pip install 'ehatp[hddl]')")
+    hddl = Path(__file__).parent / "data" / "hddl"
+    marker = tmp_path / "INJECTED-CODE-RAN"
+    name = marked(hostile_names()[1], marker).replace("\n", " ")  # a sidecar holds no newline
+    description = marked(hostile_names()[2], marker)
+    text = (hddl / "transport-sidecar.toml").read_text(encoding="utf-8")
+    assert "\n[problem]\n" in text
+    side = tmp_path / "side.toml"
+    side.write_text(text.replace("\n[problem]\n", f"\n[problem]\nname = {json.dumps(name)}\n"
+                                 f"description = {json.dumps(description)}\n"), encoding="utf-8")
+    r = runner.invoke(app, ["import-hddl", str(hddl / "transport-domain.hddl"),
+                            str(hddl / "transport-p1.hddl"), "--sidecar", str(side),
+                            "--out", str(tmp_path / "transport.py")])
+    assert r.exit_code == 0, r.output
+    problem = tomllib.loads((tmp_path / "transport.toml").read_text(encoding="utf-8"))
+    assert problem["problem"]["name"] == name
+    assert problem["problem"]["description"] == description
+    import_file(tmp_path / "transport.py").make_domain()
+    assert not marker.exists()

@@ -107,8 +107,8 @@ def read_sidecar(path: str | Path | None) -> Sidecar:
 
 def _printable(data: Mapping[str, Any], where: str) -> None:
     """Refuse a key or string of the sidecar that holds a control character (ESC included):
-    they become names, printed to terminals and written to files. (A walk with a stack: any
-    depth.)"""
+    they become names, printed to terminals and written to files (``[problem] description``
+    may hold newlines and tabs, as in a problem file). (A walk with a stack: any depth.)"""
     stack: list[tuple[str, Any]] = [("", data)]
     while stack:
         place, value = stack.pop()
@@ -117,7 +117,9 @@ def _printable(data: Mapping[str, Any], where: str) -> None:
                 stack += [(place or "a key", k), (f"{place}.{k}" if place else str(k), v)]
         elif isinstance(value, list | tuple):
             stack += [(place, v) for v in value]
-        elif isinstance(value, str) and (ch := control_char(value)) is not None:
+        elif isinstance(value, str) and (ch := control_char(
+                value.replace("\n", "").replace("\t", "") if place == "problem.description"
+                else value)) is not None:
             raise HddlUnsupported(f"{where}: {place}: {value!r} holds the control character "
                                   f"{ch!r}; remove it")
 
