@@ -26,11 +26,14 @@ import json
 import logging
 import multiprocessing
 import os
+import signal
 import socket
+import threading
 import tomllib
 from collections import deque
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 from datetime import date, datetime
 from datetime import time as dtime
@@ -43,7 +46,7 @@ from rich.table import Table
 from .. import __version__
 from ..errors import InputError
 from ..formats.problem_toml import loads
-from .sweep_worker import ROW_KEYS, Task, error_row, run_instance
+from .sweep_worker import ROW_KEYS, Task, end_with_driver, error_row, run_instance
 
 Grid = dict[str, list[Any]]
 Row = dict[str, Any]
@@ -284,6 +287,11 @@ class Pool(Protocol):
 
     def restart(self) -> None: ...
 
+    def abort(self) -> None:
+        """Stop at once, the tasks running included (the sweep was interrupted); then
+        :meth:`close` has nothing left to wait for."""
+        ...
+
     def close(self) -> None: ...
 
 
@@ -297,7 +305,8 @@ def default_workers() -> int:
 class LocalPool:
     """Worker processes on this machine (``concurrent.futures.ProcessPoolExecutor``, started by
     forkserver where there is one, else spawn; never ``max_tasks_per_child``, which hangs on
-    Python 3.11). A dead worker breaks the whole pool: :meth:`restart` makes a new one."""
+    Python 3.11). A dead worker breaks the whole pool: :meth:`restart` makes a new one. Each
+    worker ends by itself when this process ends (:func:`sweep_worker.end_with_driver`)."""
 
     name = "local"
 
@@ -311,7 +320,8 @@ class LocalPool:
         self.ex = self._new()
 
     def _new(self) -> cf.ProcessPoolExecutor:
-        return cf.ProcessPoolExecutor(max_workers=self.slots, mp_context=self.ctx)
+        return cf.ProcessPoolExecutor(max_workers=self.slots, mp_context=self.ctx,
+                                      initializer=end_with_driver)
 
     def submit(self, task: Task) -> cf.Future[Row]:
         return self.ex.submit(run_instance, task)
@@ -324,6 +334,21 @@ class LocalPool:
     def restart(self) -> None:
         self.ex.shutdown(wait=True, cancel_futures=True)
         self.ex = self._new()
+
+    def abort(self) -> None:
+        """End the worker processes (SIGTERM, then SIGKILL after 2 s): ``shutdown`` alone
+        would wait for the instances running (Python 3.11 has no ``terminate_workers``)."""
+        procs = list((getattr(self.ex, "_processes", None) or {}).values())
+        self.ex.shutdown(wait=False, cancel_futures=True)
+        for p in procs:
+            with suppress(OSError, ValueError):
+                p.terminate()
+        for p in procs:
+            with suppress(OSError, ValueError, AssertionError):
+                p.join(2)
+                if p.is_alive():
+                    p.kill()
+                    p.join(2)
 
     def close(self) -> None:
         self.ex.shutdown(wait=True, cancel_futures=True)
@@ -374,7 +399,15 @@ class DaskPool:
     def restart(self) -> None:
         """Dask restarts lost workers itself."""
 
+    def abort(self) -> None:
+        """Cancel the tasks and stop the cluster started here (its worker processes go with
+        it); a running task of a cluster at ``--address`` runs to its end (Dask cannot stop
+        it), but its row is not waited for."""
+        self.close()  # shutdown(wait=False) cancels the futures
+
     def close(self) -> None:
+        if self.client.status == "closed":
+            return
         self.executor.shutdown(wait=False)
         self.client.close()
         if self.cluster is not None:
@@ -405,11 +438,15 @@ class RayPool:
                                  f"({' '.join(str(e).split())})",
                                  "start one (ray start --head) and give its address") from None
         self.remote = ray.remote(num_cpus=1, max_retries=1)(run_instance)
+        self.running: dict[cf.Future[Row], Any] = {}  # the ObjectRef behind each future
         cpus = int(ray.cluster_resources().get("CPU", workers))
         self.slots = max(64, 4 * cpus)
 
     def submit(self, task: Task) -> cf.Future[Row]:
-        fut: cf.Future[Row] = self.remote.remote(task).future()
+        ref = self.remote.remote(task)
+        fut: cf.Future[Row] = ref.future()
+        self.running[fut] = ref
+        fut.add_done_callback(lambda f: self.running.pop(f, None))
         return fut
 
     def failure(self, task: Task, exc: BaseException) -> Row:
@@ -424,8 +461,16 @@ class RayPool:
     def restart(self) -> None:
         """Ray restarts lost workers itself."""
 
+    def abort(self) -> None:
+        """Cancel the running tasks (their worker processes are ended) and stop the Ray
+        started here."""
+        for ref in list(self.running.values()):
+            with suppress(Exception):  # a task that ended meanwhile, a lost connection
+                self.ray.cancel(ref, force=True)
+        self.close()
+
     def close(self) -> None:
-        if self.owned:
+        if self.owned and self.ray.is_initialized():
             self.ray.shutdown()
 
 
@@ -444,11 +489,43 @@ def open_pool(kind: ExecutorKind, workers: int, address: str | None) -> Pool:
 # --- running ---------------------------------------------------------------------------------
 
 
+@contextmanager
+def sigterm_as_interrupt() -> Iterator[None]:
+    """Within the block, SIGTERM (what ``timeout``, Slurm's ``scancel`` and CI cancellation
+    send) raises :class:`KeyboardInterrupt` as Ctrl-C does, so both stop a sweep the same
+    way; outside the main thread (where no handler can be set) nothing changes."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum: int, frame: object) -> None:
+        raise KeyboardInterrupt
+
+    before = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, before)
+
+
 def run_tasks(tasks: Iterable[Task], pool: Pool, emit: Callable[[Row], None]) -> None:
     """Run every task on ``pool`` and ``emit`` each row as it arrives. When the pool loses a
     worker, the tasks that were in flight run again one at a time; one that loses its worker
     even alone becomes a ``crashed`` error row (one ended by its watchdog returns its
-    ``killed`` row at once). :class:`ExecutorFailed` stops the run."""
+    ``killed`` row at once). :class:`ExecutorFailed` stops the run.
+
+    Ctrl-C or SIGTERM (:func:`sigterm_as_interrupt`) emits the rows already finished, stops
+    the pool at once (:meth:`Pool.abort`) and raises :class:`KeyboardInterrupt`: every row
+    emitted is whole, and the instances not emitted run on ``--resume``."""
+    with sigterm_as_interrupt():
+        try:
+            _run_tasks(tasks, pool, emit)
+        except KeyboardInterrupt:
+            pool.abort()
+            raise
+
+
+def _run_tasks(tasks: Iterable[Task], pool: Pool, emit: Callable[[Row], None]) -> None:
     queue = deque(tasks)
     suspects: deque[Task] = deque()
     inflight: dict[cf.Future[Row], Task] = {}
@@ -492,6 +569,12 @@ def run_tasks(tasks: Iterable[Task], pool: Pool, emit: Callable[[Row], None]) ->
             else:
                 suspects.extend(lost)
             solo = None
+    except KeyboardInterrupt:
+        for fut in list(inflight):  # finished, not emitted yet
+            if fut.done() and not fut.cancelled() and fut.exception() is None:
+                emit(fut.result())
+                del inflight[fut]
+        raise
     finally:
         for fut in inflight:
             fut.cancel()

@@ -14,7 +14,9 @@ with ``status = "error"``. Isolation (see :class:`Watchdog` and :func:`memory_li
 * memory: ``solve``'s progress callback watches resident memory and stops the instance at
   the budget; in a process of its own (the local pool) the address space is also limited with
   ``RLIMIT_AS``, well above the budget, as a backstop, and restored after (a Dask or Ray
-  worker, whose other threads must keep working, has the watch only).
+  worker, whose other threads must keep working, has the watch only);
+* the driver's end: a local worker process ends by itself when the ``ehatp sweep`` process
+  that started it ends, however it ends (:func:`end_with_driver`).
 """
 
 from __future__ import annotations
@@ -23,8 +25,12 @@ import contextlib
 import ctypes
 import gc
 import json
+import multiprocessing
+import multiprocessing.connection
 import os
+import signal
 import socket
+import sys
 import threading
 import time
 import traceback
@@ -51,6 +57,8 @@ ROW_KEYS = ("key", "instance", "overrides", "problem", "status", "optimal", "cos
 _POLICY_STATS = ("cost", "worst_case", "expected", "communications", "leaves")
 _TIME_STATS = ("time_ms",)
 KILLED_EXIT = 86  # the exit code of a worker its watchdog ended
+ORPHAN_EXIT = 87  # the exit code of a local worker that outlived the sweep that started it
+PR_SET_PDEATHSIG = 1  # linux/prctl.h
 GB = 1 << 30
 
 
@@ -358,3 +366,59 @@ def memory_limit(gb: float | None) -> Iterator[None]:
             _active -= 1
             if _active == 0 and _saved is not None:
                 resource.setrlimit(resource.RLIMIT_AS, _saved)
+
+
+# --- the driver's end ------------------------------------------------------------------------
+
+
+def end_with_driver() -> None:
+    """Make this worker process end as soon as the process that started it (the ``ehatp sweep``
+    driver) ends, even by SIGKILL: the initializer of the local pool's workers.
+
+    A thread waits on the driver's sentinel (a pipe that only the driver holds open, which
+    multiprocessing gives every child, forkserver or spawn, on every platform) and ends the
+    process when it closes. A worker stuck in native code holding the GIL never lets that
+    thread run, so on Linux the kernel is asked as well: ``PR_SET_PDEATHSIG`` sends SIGKILL
+    when the worker's parent ends. Under forkserver that parent is the fork server, which
+    stays up as long as any process holds its "alive" pipe, and every child inherits one; the
+    worker closes its copy, so that the fork server ends with the driver, and the kernel then
+    ends the worker."""
+    parent = multiprocessing.parent_process()
+    if parent is None:  # not a multiprocessing child: nothing to watch
+        return
+    if parent.pid != os.getppid():  # forked by the fork server
+        _release_fork_server()
+        _kill_with_parent()
+    threading.Thread(target=_wait_for_driver, args=(parent.sentinel,), daemon=True,
+                     name="ehatp-sweep-driver-watch").start()
+
+
+def _wait_for_driver(sentinel: int) -> None:
+    """Return never: end the process once ``sentinel`` says the driver has ended."""
+    multiprocessing.connection.wait([sentinel])
+    os._exit(ORPHAN_EXIT)
+
+
+def _release_fork_server() -> None:
+    """Close this process's copy of the fork server's "alive" pipe (multiprocessing hands one
+    to every child it forks), so that the fork server ends when the driver does."""
+    from multiprocessing import forkserver
+
+    server = getattr(forkserver, "_forkserver", None)  # private: absent in another Python
+    fd = getattr(server, "_forkserver_alive_fd", None)
+    if isinstance(fd, int):
+        with contextlib.suppress(OSError):
+            os.close(fd)
+        server._forkserver_alive_fd = None  # type: ignore[union-attr]
+
+
+def _kill_with_parent() -> None:
+    """Ask Linux to send this process SIGKILL when its parent ends (``prctl``); elsewhere, or
+    without a C library, nothing (the driver watch alone acts)."""
+    if not sys.platform.startswith("linux"):
+        return
+    ppid = os.getppid()
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+    if os.getppid() != ppid:  # the parent ended before the request: nobody will signal
+        os._exit(ORPHAN_EXIT)
