@@ -370,6 +370,41 @@ def test_plot(local_rows: list[dict[str, Any]], tmp_path: Path) -> None:
     assert code == 2 and "use one of: problem.K, communication.inform" in err
 
 
+def plot_rows(series: int) -> list[dict[str, Any]]:
+    """Rows of a sweep over problem.K = 2, 3, 4 and ``series`` values of domain.v: few
+    states, few worlds, all whole numbers close together (where matplotlib would put ticks
+    at 2.25, 5.5, ...)."""
+    return [{"key": f"{k}-{v}", "instance": "p.toml", "overrides": {"problem.K": k,
+             "domain.v": v}, "status": "solved", "time_s": 0.01 * k,
+             "stats": {"distinct": 5 + k % 2 + v % 2, "max_worlds": 1 + k % 2}}
+            for k in (2, 3, 4) for v in range(series)]
+
+
+def ticks(axis: Any) -> list[float]:
+    low, high = sorted(axis.get_view_interval())
+    return [t for t in axis.get_ticklocs() if low <= t <= high]
+
+
+@pytest.mark.parametrize(("series", "outside"), [(3, False), (24, True)])
+def test_plot_names_every_line_and_counts_in_whole_numbers(series: int, outside: bool) -> None:
+    pytest.importorskip("matplotlib", reason="matplotlib is not installed (ehatp[plot])")
+    fig, n_lines, n_points = sweep.figure(plot_rows(series), "K")
+    assert (n_lines, n_points) == (series, 3 * series)
+    fig.draw_without_rendering()
+    time_ax, states_ax, worlds_ax = fig.axes
+    legend = fig.legends[0] if outside else time_ax.get_legend()
+    assert legend is not None and len(fig.legends) == int(outside)
+    assert [t.get_text() for t in legend.get_texts()] == [f"v={v}" for v in range(series)]
+    for ax in (time_ax, states_ax, worlds_ax):
+        assert ticks(ax.xaxis) and all(t == int(t) for t in ticks(ax.xaxis))  # K
+    for ax in (states_ax, worlds_ax):
+        assert ticks(ax.yaxis) and all(t == int(t) for t in ticks(ax.yaxis))
+    assert any(t != int(t) for t in ticks(time_ax.yaxis))  # seconds are not counted
+    if outside:  # ten colours, then the same colours dashed
+        styles = {(line.get_color(), line.get_linestyle()) for line in time_ax.get_lines()}
+        assert len(styles) == series
+
+
 # --- other executors -------------------------------------------------------------------------
 
 

@@ -728,10 +728,31 @@ def plot_key(rows: Sequence[Row], x: str) -> str:
 
 
 def plot(rows: Sequence[Row], x: str, out: Path) -> tuple[int, int]:
-    """Draw time, distinct states and |W| against the override ``x``, one line per
-    combination of the other overrides (and problem file); return (lines, points)."""
+    """Draw time, distinct states and |W| against the override ``x`` into ``out`` (see
+    :func:`figure`); return (lines, points)."""
+    fig, n_lines, n_points = figure(rows, x)
     try:
-        figure = importlib.import_module("matplotlib.figure")
+        fig.savefig(out)
+    except (OSError, ValueError) as e:
+        raise InputError(str(out), "", f"cannot write the plot ({e})",
+                         "choose another --out (.png, .svg or .pdf)") from None
+    return n_lines, n_points
+
+
+LEGEND_INSIDE = 6  # more series than this: the legend goes beside the panels
+LINE_STYLES = ("-", "--", ":", "-.")
+
+
+def figure(rows: Sequence[Row], x: str) -> tuple[Any, int, int]:
+    """Return a matplotlib figure of time, distinct states and |W| against the override
+    ``x``, one line per combination of the other overrides (and problem file), with how many
+    lines and points it has. A legend names the lines (inside the first panel for a few,
+    beside the panels for more; colours repeat every ten lines, each time with another line
+    style); whole-number axes (``x`` when every value is whole, the counts) have whole-number
+    ticks."""
+    try:
+        figure_mod = importlib.import_module("matplotlib.figure")
+        ticker = importlib.import_module("matplotlib.ticker")
     except ImportError:
         raise InputError("--plot", "", "drawing needs matplotlib, which is not installed",
                          PLOT_EXTRA) from None
@@ -743,6 +764,7 @@ def plot(rows: Sequence[Row], x: str, out: Path) -> tuple[int, int]:
                          "plot a sweep whose instances ran")
     xs_all = [r["overrides"][key] for r in usable]
     numeric = all(isinstance(v, int | float) and not isinstance(v, bool) for v in xs_all)
+    whole_x = numeric and all(float(v).is_integer() for v in xs_all)
     cats: list[Any] = []
     for v in xs_all:
         if v not in cats:
@@ -759,12 +781,19 @@ def plot(rows: Sequence[Row], x: str, out: Path) -> tuple[int, int]:
         label = " ".join(p for p in (label, " ".join(f"{k.rsplit('.', 1)[-1]}={_toml(v)}"
                                                       for k, v in rest.items())) if p)
         lines.setdefault(label or "all", []).append(r)
-    metrics = (("time_s", "time (s)"), ("distinct", "distinct states"), ("max_worlds", "|W|"))
-    fig = figure.Figure(figsize=(15, 4.8), layout="constrained")
+    metrics = (("time_s", "time (s)", False), ("distinct", "distinct states", True),
+               ("max_worlds", "|W|", True))
+    outside = len(lines) > LEGEND_INSIDE
+    columns = 1 + (len(lines) - 1) // 30
+    # beside the panels, the legend widens the figure rather than narrow them (inches for
+    # the "small" font)
+    width = 15 + (0.07 * max(map(len, lines)) + 0.5) * columns if outside else 15
+    height = max(4.8, 0.2 * min(len(lines), 30) + 0.8) if outside else 4.8
+    fig = figure_mod.Figure(figsize=(width, height), layout="constrained")
     axes = fig.subplots(1, 3)
-    for ax, (m, title) in zip(axes, metrics, strict=True):
+    for ax, (m, title, count) in zip(axes, metrics, strict=True):
         values: list[float] = []
-        for label, rs in lines.items():
+        for i, (label, rs) in enumerate(lines.items()):
             pts = sorted((pos(r["overrides"][key]),
                           r.get(m) if m == "time_s" else r["stats"].get(m),
                           r.get("status") == "solved") for r in rs)
@@ -773,7 +802,8 @@ def plot(rows: Sequence[Row], x: str, out: Path) -> tuple[int, int]:
                 continue
             values += [float(p[1]) for p in pts if p[1] is not None]
             (line,) = ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o",
-                              label=label)
+                              label=label, color=f"C{i % 10}",
+                              linestyle=LINE_STYLES[i // 10 % len(LINE_STYLES)])
             unsolved = [p for p in pts if not p[2]]
             if unsolved:
                 ax.plot([p[0] for p in unsolved], [p[1] for p in unsolved], "x",
@@ -781,17 +811,19 @@ def plot(rows: Sequence[Row], x: str, out: Path) -> tuple[int, int]:
         positive = [v for v in values if v > 0]
         if positive and max(positive) / min(positive) > 100:
             ax.set_yscale("log")
+        elif count:
+            ax.yaxis.set_major_locator(ticker.MaxNLocator(integer=True))
         ax.set_title(title)
         ax.set_xlabel(key)
         if not numeric:
             ax.set_xticks(range(len(cats)), [_toml(c) for c in cats])
+        elif whole_x:
+            ax.xaxis.set_major_locator(ticker.MaxNLocator(integer=True))
         ax.grid(True, alpha=0.3)
-    if 1 < len(lines) <= 16:
+    if outside:
+        handles, labels = axes[0].get_legend_handles_labels()
+        fig.legend(handles, labels, loc="outside right upper", fontsize="small", ncols=columns)
+    elif len(lines) > 1:
         axes[0].legend(fontsize="small")
     fig.suptitle(f"ehatp sweep: against {key} (x: not solved)")
-    try:
-        fig.savefig(out)
-    except (OSError, ValueError) as e:
-        raise InputError(str(out), "", f"cannot write the plot ({e})",
-                         "choose another --out (.png, .svg or .pdf)") from None
-    return len(lines), len(usable)
+    return fig, len(lines), len(usable)
