@@ -1,0 +1,117 @@
+"""``ehatp play`` in a real Chromium (slow): a scripted participant plays every branch of P2, P4
+(where the human asks) and both Sally-Anne examples to the goal; at every step the facts and
+events the page shows are checked against the human's worlds (tests/play_check.py: nothing
+the human cannot perceive); an uncovered move makes the robot replan, which only the
+experimenter's page says; every session's log replays to the same end state."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from ehatp.play.session import read_log, replay
+
+from .conftest import ROOT
+from .play_check import PROBLEMS, branches, leaks, make_hub, serving
+from .test_render import browser  # noqa: F401  (the fixture: a headless Chromium, or a skip)
+
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.skipif(not all(importlib.util.find_spec(m) for m in ("starlette", "uvicorn")),
+                       reason="ehatp[play] is not installed (pip install 'ehatp[play]')"),
+]
+
+READ_PAGE = """
+const facts = [...document.querySelectorAll("[data-fact]")].map(
+  e => ({fact: e.dataset.fact, status: e.dataset.status}));
+const feed = [...document.querySelectorAll("#feed li")].map(
+  e => ({kind: e.dataset.kind, text: e.textContent}));
+const moves = [...document.querySelectorAll("#moves button")].map(e => e.dataset.move);
+return {facts, feed, moves, text: document.body.innerText,
+        step: document.body.dataset.step, status: document.body.dataset.status};
+"""
+
+
+def wait_turn(driver: Any, old_step: str | None = None) -> dict[str, Any]:
+    """Wait until the page waits for the participant (or the session is over) after
+    ``old_step``; return what the page shows."""
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    def ready(d: Any) -> Any:
+        page = d.execute_script(READ_PAGE)
+        if page["status"] in ("your-turn", "goal", "over") and page["step"] != old_step \
+                and d.execute_script("return document.body.dataset.ready") == "true":
+            return page
+        return False
+
+    page: dict[str, Any] = WebDriverWait(driver, 20).until(ready)
+    return page
+
+
+def play_branch(driver: Any, address: str, hub: Any, moves: list[str]) -> Any:
+    """Open a new session, play ``moves`` by clicking, check every page shown; return the
+    session."""
+    from selenium.webdriver.common.by import By
+
+    driver.get(f"http://{address}/")
+    sid = driver.current_url.rstrip("/").split("/")[-1]
+    live = hub.sessions[sid].session
+    page = wait_turn(driver)
+    for move in [*moves, None]:
+        assert int(page["step"]) == len(live.ex.history)
+        found = leaks(live.ex, page["facts"], page["feed"])
+        assert found == [], (moves, move, found)
+        assert "replan" not in page["text"].lower()
+        if move is None:
+            break
+        assert move in page["moves"], (move, page["moves"])
+        driver.find_element(By.CSS_SELECTOR, f'button[data-move="{move}"]').click()
+        page = wait_turn(driver, page["step"])
+    return live, page
+
+
+@pytest.mark.parametrize("name", sorted(PROBLEMS))
+def test_a_participant_plays_every_branch_to_the_goal_seeing_only_what_the_human_can(
+        name: str, browser: Any, tmp_path: Path) -> None:  # noqa: F811
+    hub = make_hub(ROOT / PROBLEMS[name], tmp_path)
+    with serving(hub) as address:
+        probe = hub.new()  # a session to read the policy's branches from
+        paths = branches(probe.session.ex)
+        assert paths
+        for moves in paths:
+            live, page = play_branch(browser, address, hub, moves)
+            assert page["status"] == "goal" and live.outcome == "goal", moves
+            log = next(tmp_path.glob(f"*-{live.id}.jsonl"))
+            report = replay(read_log(log), live.problem, live.policy, live.source)
+            assert report.ok, str(report)
+            assert report.session.ex.state == live.ex.state
+
+
+def test_an_uncovered_move_replans_and_only_the_experimenter_page_says_so(
+        browser: Any, tmp_path: Path) -> None:  # noqa: F811
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    hub = make_hub(ROOT / "examples/cubes/qualitative.toml", tmp_path,
+                   policy_of=ROOT / "examples/cubes/qualitative-ask.toml")
+    with serving(hub) as address:
+        live, page = play_branch(browser, address, hub, ["pass", "place(w, box2)"])
+        assert page["status"] == "goal" and live.replans == 1
+        assert "R says: empty(box2)" in [e["text"] for e in page["feed"]]
+        shot = tmp_path / "play.png"
+        browser.save_screenshot(str(shot))
+        assert shot.stat().st_size > 10_000
+        browser.get(f"http://{address}/experimenter/{live.id}?key={hub.key}")
+        WebDriverWait(browser, 20).until(
+            lambda d: d.execute_script("return document.body.dataset.ready") == "true")
+        assert browser.execute_script("return document.body.dataset.replans") == "1"
+        assert "(REPLANNED)" in browser.execute_script("return document.body.innerText")
+        log = next(tmp_path.glob(f"*-{live.id}.jsonl"))
+        records = read_log(log)
+        assert [r["move"] for r in records if r["type"] == "replan"] == ["pass"]
+        assert replay(records, live.problem, live.policy, live.source).ok
+        # no console errors on either page
+        errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+        assert errors == []
