@@ -53,6 +53,7 @@ COMMANDS: dict[str, Entry] = {
                                 "what the robot finished) and on stdout (what the robot should "
                                 "do, what the human believes, the goal, errors), for a robot "
                                 "process to run as a subprocess. See docs/execution.md."),
+    "play": Entry("play", "Play the human against the robot's policy in a browser: the participant's page shows only what the human perceives, an experimenter's page shows the truth and the policy, and every session is logged as JSON lines. See docs/play.md."),  # noqa: E501
     "sweep": Entry("sweep", "Solve many problems, and variants of them from a grid, in parallel: "
                             "one JSON line per instance (status, statistics, costs, validation, "
                             "time or error), a summary table at the end."),
