@@ -306,7 +306,8 @@ def test_a_limit_in_writing_an_expansion_writes_the_lifted_policy(
 
 def test_the_schema_accepts_every_examples_v3_policy_and_wants_its_table() -> None:
     jsonschema = pytest.importorskip("jsonschema")
-    schema = json.loads((ROOT / "src" / "ehatp" / "formats" / "policy.schema.json").read_text(encoding="utf-8"))
+    schema_file = ROOT / "src" / "ehatp" / "formats" / "policy.schema.json"
+    schema = json.loads(schema_file.read_text(encoding="utf-8"))
     check = jsonschema.Draft202012Validator(schema)
     lifted = 0
     for example in EXAMPLES:

@@ -15,8 +15,6 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, cast
 
-import fastjsonschema
-
 from ..errors import InputError
 from ..model.problem import Problem
 from .policy import POLICY_FIX, Policy, malformed
@@ -47,6 +45,8 @@ SCHEMA = "policy.schema.json"
 @cache
 def _schema_check() -> Callable[[Any], Any]:
     """Return the compiled check of :data:`SCHEMA` (compiled once per process)."""
+    import fastjsonschema  # on first use: `ehatp --help` loads no schema checker
+
     schema = json.loads(resources.files(__package__).joinpath(SCHEMA).read_text("utf-8"))
     return cast(Callable[[Any], Any], fastjsonschema.compile(schema))
 
@@ -81,8 +81,11 @@ def check_schema(path: Path | str) -> None:
     if not isinstance(raw, dict) or raw.get("version") not in (2, 3) or isinstance(
             raw.get("version"), bool):
         return
+    check = _schema_check()
+    import fastjsonschema
+
     try:
-        _schema_check()(raw)
+        check(raw)
     except fastjsonschema.JsonSchemaValueException as e:
         where = str(e.name or "data")
         place = where[len("data."):] if where.startswith("data.") else ""
