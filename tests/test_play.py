@@ -28,7 +28,7 @@ from ehatp.play.session import (
 )
 from ehatp.play.views import check_scene, cooking_view, cubes_view, view_for
 
-from .conftest import ROOT, solved
+from .conftest import EXAMPLES, ROOT, Example, solved
 from .play_check import PROBLEMS, branches, leaks, serving, view_facts
 
 HAVE_WEB = all(importlib.util.find_spec(m) for m in ("starlette", "uvicorn", "httpx"))
@@ -74,6 +74,17 @@ def test_every_branch_reaches_the_goal_and_shows_only_what_the_human_perceives(
         s = session(name)
         assert all(f == [] for f in play(s, path)), path
         assert s.outcome == "goal" and s.participant_view()["status"] == "goal"
+
+
+@pytest.mark.parametrize("example", EXAMPLES, ids=str)
+def test_every_example_plays_a_branch_to_the_goal_showing_only_what_the_human_perceives(
+        example: Example) -> None:
+    s = session(str(example.path))
+    path = branches(s.ex, cap=1)[0]
+    assert all(f == [] for f in play(s, path)), path
+    assert s.outcome == "goal"
+    report = replay(s.log.records, s.problem, s.policy, s.source)  # type: ignore[attr-defined]
+    assert report.ok, str(report)
 
 
 def test_a_participant_never_receives_the_truth_of_what_happened_out_of_sight() -> None:
@@ -332,3 +343,30 @@ def test_ten_sessions_at_once_lose_and_mix_no_log_line(live_server: tuple[str, A
         report = replay(records, live.problem, live.policy, live.source)
         assert report.ok, str(report)
         assert report.session.ex.state == live.ex.state and live.outcome == "goal"
+
+
+def test_a_move_on_a_false_belief_ends_the_session_as_failed(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """A move the human can make but that fails (docs/semantics.md §4: it acts on a false
+    belief) ends the session; no policy offers one, so the executor is made to."""
+    import dataclasses
+
+    from ehatp.errors import UncoveredHumanAction
+
+    s = session("p2")
+    real = s.ex.legal_human_moves()
+    failing = dataclasses.replace(real[0], child=None, failure="on(w, ot) does not hold")
+
+    def observe(label: str) -> Any:
+        raise UncoveredHumanAction(label, [], [failing.label], "it fails")
+
+    monkeypatch.setattr(s.ex, "legal_human_moves", lambda: [failing])
+    monkeypatch.setattr(s.ex, "observe_human_action", observe)
+    assert s.choose(failing.label) == "failed"
+    assert s.outcome == "failed" and s.status() == "over"
+    end = s.log.records[-1]  # type: ignore[attr-defined]
+    assert end["type"] == "end" and end["outcome"] == "failed"
+    assert end["reason"] == "on(w, ot) does not hold"
+    view = s.participant_view()
+    assert view["feed"][-1]["text"] == f"You try {failing.label}, but it cannot be done."
+    assert "on(w, ot) does not hold" not in json.dumps(view) and view["moves"] == []

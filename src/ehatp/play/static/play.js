@@ -5,7 +5,7 @@
 
 const KINDS = new Set(["table", "box", "hand", "place", "pan", "dish", "cube", "agent",
   "ingredient", "state", "you", "robot", "hidden", "speech", "answer", "question", "end",
-  "action", "ask", "pass"]);
+  "action", "ask", "pass", "answer"]);
 
 function el(tag, cls, text) {
   const e = document.createElement(tag);
