@@ -10,21 +10,24 @@ imported only when the command runs: ``ehatp --help`` lists the commands from :d
 and imports none of them.
 
 Exit codes: 0 success, 1 no policy (or an invalid one, or an unsolved benchmark row), 2 bad
-input, 3 internal error. Bad input is always one line on stderr, ``FILE:PLACE: problem; fix``,
-never a traceback; an internal error is one line naming the file that holds the traceback
-(``ehatp --debug`` shows it instead). See :mod:`ehatp.cli.common`.
+input, 3 internal error, 141 the output's reader went away (``ehatp ... | head``; quiet). Bad
+input is always one line on stderr, ``FILE:PLACE: problem; fix``, never a traceback; an
+internal error is one line naming the file that holds the traceback (``ehatp --debug`` shows it
+instead). See :mod:`ehatp.cli.common`.
 """
 
 from __future__ import annotations
 
 import importlib
+import os
+import sys
 from typing import Annotated, Any, NamedTuple
 
 import typer
 from typer.core import TyperCommand
 
 from .. import __version__
-from .common import Commands
+from .common import Commands, PipeClosed, is_broken_pipe, quiet_exit_broken_pipe
 
 
 class Entry(NamedTuple):
@@ -134,9 +137,44 @@ def _root(
 
 
 def main() -> None:
-    """Console entry point (``ehatp``)."""
-    app(prog_name="ehatp")
+    """Run ``ehatp`` (the console entry point) and exit with its code. When the output's reader
+    goes away (``ehatp solve ... | head``), at any point -- a command's output, ``--help``, the
+    last flush of stdout -- the run ends quietly with exit code 141
+    (:data:`~ehatp.cli.common.EXIT_BROKEN_PIPE`, what a shell reports for a tool SIGPIPE
+    ended), never 1, which means "no policy"."""
+    before = _stdout_identity()
+    try:
+        try:
+            app(prog_name="ehatp", obj=STANDALONE)  # the backstop may end this process
+        except SystemExit as e:
+            sys.stdout.flush()  # the buffered rest, here rather than at interpreter exit
+            if e.code == 1 and before != _stdout_identity() == _devnull_identity():
+                # rich (typer's help, a live display) met the broken pipe itself: it pointed
+                # stdout at the null device and exits 1, which here would mean "no policy"
+                quiet_exit_broken_pipe()
+            raise
+        sys.stdout.flush()
+    except PipeClosed:
+        quiet_exit_broken_pipe()
+    except OSError as e:
+        if not is_broken_pipe(e):
+            raise
+        quiet_exit_broken_pipe()
 
+
+def _stdout_identity() -> tuple[int, int] | None:
+    """Return the device and inode file descriptor 1 refers to (None if it has none)."""
+    try:
+        st = os.fstat(1)
+    except OSError:
+        return None
+    return st.st_dev, st.st_ino
+
+
+def _devnull_identity() -> tuple[int, int]:
+    """Return the device and inode of the null device."""
+    st = os.stat(os.devnull)
+    return st.st_dev, st.st_ino
 
 __all__ = ["COMMANDS", "Entry", "LazyCommands", "app", "load_command", "main"]
 

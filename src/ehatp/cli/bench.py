@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from ..model.problem import parse_size
-from .common import EXIT_NO_POLICY, EXIT_OK, command_app, die, stderr_console
+from .common import EXIT_NO_POLICY, EXIT_OK, command_app, die, stderr_console, write_stdout
 
 if TYPE_CHECKING:
     from rich.console import Console
@@ -25,7 +25,7 @@ def _write_rows(rows: object, json_out: Path) -> None:
     """A bench's rows as JSON, to ``json_out`` or to stdout for ``-``."""
     data = json.dumps(rows, indent=1) + "\n"
     if str(json_out) == "-":
-        typer.echo(data, nl=False)
+        write_stdout(data)
         return
     try:
         json_out.write_text(data, encoding="utf-8")
@@ -84,7 +84,7 @@ def bench_table1(
         if con is not None and _fits(con, table):
             con.print(table)
         else:
-            typer.echo(bench_mod.format_table(rows), nl=False)
+            write_stdout(bench_mod.format_table(rows))
     failed = [r for r in rows if not r["solved"]]
     for r in failed:
         typer.echo(f"not solved: {r['instance']}: {r['error']}", err=True)
@@ -174,7 +174,7 @@ def bench_scaling(
     if json_out is not None:
         _write_rows(rows, json_out)
     if str(json_out) != "-":
-        typer.echo(bench_mod.format_scaling(rows), nl=False)
+        write_stdout(bench_mod.format_scaling(rows))
     if plot is not None and not bench_mod.plot_scaling({"this run": rows}, str(plot)):
         typer.echo("note: --plot skipped: matplotlib is not installed "
                    "(pip install 'ehatp[plot]')", err=True)

@@ -3,13 +3,17 @@ command module makes its typer app (:func:`command_app`), and reading the files 
 
 Exit codes: 0 ok, 1 no (valid) policy, 2 bad input (one line ``error: FILE:PLACE: problem;
 fix``), 3 internal error (one line naming a file that holds the traceback, or the traceback on
-screen with ``ehatp --debug``). Usage mistakes (an unknown option, a missing argument) are bad
-input too, and also one line.
+screen with ``ehatp --debug``), 141 the reader of the output went away (``ehatp ... | head``:
+no message, as a shell reports a command that SIGPIPE ended). Usage mistakes (an unknown
+option, a missing argument) are bad input too, and also one line.
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import errno
+import os
 import platform
 import sys
 import tempfile
@@ -35,6 +39,7 @@ if TYPE_CHECKING:
     from rich.console import Console
 
 EXIT_OK, EXIT_NO_POLICY, EXIT_BAD_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
+EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE: what a shell reports for a tool a closed pipe ended
 ARGV_KEY = "ehatp.argv"  # where the command line is kept for an internal-error report
 
 
@@ -124,21 +129,54 @@ class Commands(TyperGroup):
     def make_context(self, info_name: str | None, args: list[str], parent: Any = None,
                      **extra: Any) -> Any:
         argv = list(args)  # parsing consumes the list
-        with _usage_errors():
+        with _pipe_closed(), _usage_errors():  # --help and --version write here
             ctx = super().make_context(info_name, args, parent, **extra)
         ctx.meta[ARGV_KEY] = argv
         return ctx
 
     def invoke(self, ctx: Any) -> Any:
         try:
-            with _usage_errors():
+            with _pipe_closed(), _usage_errors():
                 return super().invoke(ctx)
-        except (typer.Exit, typer.Abort, TyperException, EOFError):
+        except (typer.Exit, typer.Abort, TyperException, EOFError, PipeClosed):
             raise  # the normal ways out (EOFError: typer's "Aborted!")
-        except BrokenPipeError:
-            raise  # the reader went away (e.g. `| head`): typer exits quietly
         except Exception as e:
             internal_error(e, ctx.meta.get(ARGV_KEY, []), bool(ctx.params.get("debug")))
+
+
+class PipeClosed(Exception):
+    """The reader of the output went away (``ehatp ... | head``): not a result and not a bug.
+    Not an :class:`OSError`, so that typer does not turn it into exit code 1 ("no policy");
+    :func:`ehatp.cli.app.main` ends the run quietly with :data:`EXIT_BROKEN_PIPE`."""
+
+
+def is_broken_pipe(e: BaseException) -> bool:
+    """Return whether ``e`` says the output's reader went away (EPIPE)."""
+    return isinstance(e, BrokenPipeError) or isinstance(e, OSError) and e.errno == errno.EPIPE
+
+
+@contextmanager
+def _pipe_closed() -> Iterator[None]:
+    try:
+        yield
+    except OSError as e:
+        if not is_broken_pipe(e):
+            raise
+        raise PipeClosed() from None
+
+
+def quiet_exit_broken_pipe() -> NoReturn:
+    """End the run after the output's reader went away: point stdout and stderr at the null
+    device (so the interpreter's last flush of what is still buffered cannot fail again and
+    print "Exception ignored ... BrokenPipeError"), then exit with :data:`EXIT_BROKEN_PIPE`,
+    saying nothing (there is no one to say it to, and ``| head`` is not a mistake)."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    for stream in (sys.stdout, sys.stderr):
+        # (a stream with no file descriptor, such as a test's capture, is left as it is)
+        with contextlib.suppress(OSError, ValueError, AttributeError):
+            os.dup2(devnull, stream.fileno())
+    os.close(devnull)
+    raise SystemExit(EXIT_BROKEN_PIPE)
 
 
 @contextmanager
@@ -190,10 +228,26 @@ def write_output(text: str, out: Path | None) -> None:
     """Write a command's output to ``out``, or to stdout when it is None (control characters
     escaped when stdout is a terminal); a file that cannot be written is one line and exit 2."""
     if out is None:
-        sys.stdout.write(printable(text, lines=True) if sys.stdout.isatty() else text)
+        write_stdout(printable(text, lines=True) if sys.stdout.isatty() else text)
         return
     try:
         out.write_text(text, encoding="utf-8")
     except OSError as e:
         die(InputError(str(out), "", f"cannot write ({e.strerror or e})",
                        "check that the directory exists and is writable").line())
+
+
+def write_stdout(text: str) -> None:
+    """Write ``text`` to stdout whole, or raise :class:`BrokenPipeError` when the reader goes
+    away first. Straight to the file descriptor, each partial write continued: Python's own
+    buffered write of a large text into a pipe whose reader leaves mid-write drops the rest
+    silently and reports success, which would end ``ehatp render ... | head`` with exit 0."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, ValueError, OSError):  # not a real file (a test's capture)
+        sys.stdout.write(text)
+        return
+    sys.stdout.flush()
+    data = memoryview(text.encode(sys.stdout.encoding or "utf-8", "replace"))
+    while data:
+        data = data[os.write(fd, data):]

@@ -9,7 +9,7 @@ from typing import Annotated
 
 import typer
 
-from .common import command_app, load_policy
+from .common import command_app, load_policy, write_stdout
 
 app = command_app()
 
@@ -56,4 +56,4 @@ def show_cmd(
 
         print_rich(lines, Console())
     else:
-        typer.echo(plain(lines), nl=False)
+        write_stdout(plain(lines))
