@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from ..errors import printable
 from ..model.problem import parse_size
 from .common import EXIT_NO_POLICY, EXIT_OK, command_app, die, stderr_console, write_stdout
 
@@ -93,8 +94,10 @@ def bench_table1(
 
 def _run_points(points: list[Any], timeout: float, memory: int, repeat: int,
                 symmetry: bool | None) -> list[dict[str, Any]]:
-    """Return the scaling rows of ``points``, each solved in a process of its own, with a
-    status line on the terminal saying which one is running."""
+    """Return the scaling rows of ``points``, each solved in a process of its own, and say on
+    stderr one line per finished point (:func:`~ehatp.experiments.bench.progress_line`),
+    whether stderr is a terminal or a pipe or a file, with a status line on a terminal saying
+    which one is running."""
     from ..experiments import bench as bench_mod
 
     console = stderr_console()
@@ -104,11 +107,19 @@ def _run_points(points: list[Any], timeout: float, memory: int, repeat: int,
         if status is not None:
             status.update(f"solving {p.name} ({i + 1}/{n}, run {run + 1}/{repeat})")
 
+    def done(row: dict[str, Any], i: int, n: int) -> None:
+        line = printable(f"bench scaling: {bench_mod.progress_line(row, i, n)}")
+        if console is not None:
+            console.print(line, markup=False, highlight=False)  # above the status line
+        else:
+            typer.echo(line, err=True)  # a line at a time: `2>&1 | tee`, a CI log
+
     if status is not None:
         status.start()
     try:
         return bench_mod.run_scaling(points, timeout=timeout, max_memory=memory,
-                                     repeat=repeat, notify=notify, symmetry=symmetry)
+                                     repeat=repeat, notify=notify, symmetry=symmetry,
+                                     done=done)
     finally:
         if status is not None:
             status.stop()

@@ -224,17 +224,43 @@ def report_file(report: str) -> Path:
     return Path(name)
 
 
-def write_output(text: str, out: Path | None) -> None:
+def write_output(text: str, out: Path | None, what: str | None = None,
+                 command: str | None = None) -> None:
     """Write a command's output to ``out``, or to stdout when it is None (control characters
-    escaped when stdout is a terminal); a file that cannot be written is one line and exit 2."""
+    escaped when stdout is a terminal); a file that cannot be written is one line and exit 2.
+    Written to a file, it says so in one line on stderr, as ``solve`` does: ``COMMAND: wrote
+    p2.html: WHAT, 60.6 kB`` (:func:`wrote_line`)."""
     if out is None:
         write_stdout(printable(text, lines=True) if sys.stdout.isatty() else text)
         return
+    data = text.encode("utf-8")
     try:
-        out.write_text(text, encoding="utf-8")
+        out.write_bytes(data)
     except OSError as e:
         die(InputError(str(out), "", f"cannot write ({e.strerror or e})",
                        "check that the directory exists and is writable").line())
+    typer.echo(wrote_line(out, len(data), what, command), err=True)
+
+
+def wrote_line(out: Path | str, size: int, what: str | None = None,
+               command: str | None = None) -> str:
+    """Return the line a command says after writing ``size`` bytes to the file ``out``, e.g.
+    ``render: wrote p2.html: HTML explorer of P2, 26 policy nodes, 60.6 kB``: the command (if
+    given), the file, ``what`` it holds (if given), its size."""
+    head = f"{command}: " if command else ""
+    parts = [what, file_size(size)] if what else [file_size(size)]
+    return printable(f"{head}wrote {out}: {', '.join(parts)}")
+
+
+def file_size(size: int) -> str:
+    """Return a size in bytes as people read it: ``812 bytes``, ``60.6 kB``, ``41.2 MB``
+    (powers of 1000)."""
+    if size < 1000:
+        return f"{size} byte" + ("" if size == 1 else "s")
+    for unit, scale in (("kB", 1e3), ("MB", 1e6)):
+        if size < scale * 1000 - 50 * scale / 1000:
+            return f"{size / scale:.1f} {unit}"
+    return f"{size / 1e9:.1f} GB"
 
 
 def write_stdout(text: str) -> None:

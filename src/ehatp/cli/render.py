@@ -8,6 +8,7 @@ from pathlib import Path
 import typer
 
 from ..errors import DotMissing, printable
+from ..formats.lifted import expanded
 from ..formats.policy_check import check_policy_problem, read_policy
 from ..formats.render import DEFAULT_MAX_NODES, Format, render
 from .common import command_app, die, load_problem, user_errors, write_output
@@ -35,7 +36,9 @@ def render_command(
 ) -> None:
     """Draw a policy as Graphviz DOT or SVG, or as a self-contained HTML explorer.
 
-    The file's structure is checked first (exit 2 if it was edited into something else)."""
+    The file's structure is checked first (exit 2 if it was edited into something else).
+    Written to a file (--out), one line on stderr says what: the file, the format, the
+    policy's nodes, the size, and how the drawing was collapsed, if it was."""
     with user_errors(policy):
         pol = read_policy(policy)
     if problem is not None:
@@ -52,6 +55,10 @@ def render_command(
                                  share=share)
         except DotMissing as e:
             die(str(e))
-    if notes:
+    if notes and out is None:
         typer.echo(printable(f"render: {policy}: collapsed: {'; '.join(notes)}"), err=True)
-    write_output(text, out)
+    kind = {Format.dot: "Graphviz DOT", Format.svg: "SVG", Format.html: "HTML explorer"}[fmt]
+    what = f"{kind} of {pol.problem}, {len(expanded(pol).nodes):,} policy nodes"
+    if notes:
+        what += f" (collapsed: {'; '.join(notes)})"
+    write_output(text, out, what, command="render")
