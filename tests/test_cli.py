@@ -232,11 +232,11 @@ def test_show_options(p2_policy: Path) -> None:
 
 def test_validate_exit_codes(p2_policy: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     problem = CUBES / "p2.toml"
-    monkeypatch.setattr(ehatp, "validate", lambda p, q: SimpleNamespace(ok=True, message=""))
+    monkeypatch.setattr(ehatp, "validate", lambda p, q, **kw: SimpleNamespace(ok=True, message=""))
     r = invoke("validate", problem, p2_policy)
     assert r.exit_code == 0 and "valid" in r.stdout
     bad = SimpleNamespace(ok=False, message="node 7: place(w, box1) is not applicable")
-    monkeypatch.setattr(ehatp, "validate", lambda p, q: bad)
+    monkeypatch.setattr(ehatp, "validate", lambda p, q, **kw: bad)
     r = invoke("validate", problem, p2_policy)
     assert r.exit_code == 1 and bad.message in r.stdout
 

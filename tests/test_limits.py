@@ -4,6 +4,7 @@ far when the root was solved. Bounds here are generous on purpose: no timing is 
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -284,3 +285,95 @@ def test_cli_progress_line_covers_writing(monkeypatch: pytest.MonkeyPatch,
     assert r.exit_code == 0, r.output
     assert shown[0] == "grounding" and "writing" in shown and "extraction" in shown
     assert any("states/s" in s for s in shown)  # the search's own line
+
+
+# --- every phase of every long command (issue 18) -------------------------------------------
+
+
+def test_a_write_stopped_half_way_leaves_the_old_file_and_no_temporary(tmp_path: Path) -> None:
+    r = ehatp.solve(ehatp.load(CUBES / "p1.toml"))
+    assert r.policy is not None
+    f = tmp_path / "p.json"
+    f.write_text("the old file", encoding="utf-8")
+    calls = 0
+
+    def stop_on_second_call() -> None:  # after the header and some nodes are written
+        nonlocal calls
+        calls += 1
+        if calls == 2:
+            raise LimitReached("timeout", "time limit")
+
+    big = Policy.from_dict(json.loads(r.policy.to_json()))
+    big.nodes = big.nodes * 300  # more than 256 nodes: check is called between them
+    with pytest.raises(LimitReached):
+        big.write(f, check=stop_on_second_call)
+    assert calls == 2
+    assert f.read_text(encoding="utf-8") == "the old file"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["p.json"]
+
+
+def test_the_streamed_file_is_the_text_to_json_gives() -> None:
+    r = ehatp.solve(ehatp.load(CUBES / "p2.toml"))
+    assert r.policy is not None
+    assert "".join(r.policy.iter_json()) == r.policy.to_json()
+    assert r.policy.to_json().startswith('{\n "K": 2,\n "after": [],')
+    assert r.policy.to_json().endswith(' ]\n}\n') or r.policy.to_json().endswith('}\n')
+
+
+def test_validate_stops_at_its_timeout_with_no_verdict(tmp_path: Path) -> None:
+    problem = big_problem(tmp_path)
+    # a policy of the same problem that takes longer than 0.1 s to check: the lifted one
+    # solved with symmetry, expanded (559 nodes, each re-derived: about 0.4 s)
+    text = problem.read_text(encoding="utf-8").replace("symmetry = false", "symmetry = true")
+    problem.write_text(text, encoding="utf-8")
+    r = ehatp.solve(ehatp.load(problem), expand=True)
+    assert r.policy is not None and len(r.policy.nodes) > 500
+    pol = tmp_path / "p.json"
+    r.policy.write(pol)
+    t0 = time.perf_counter()
+    out = _cli("validate", str(problem), str(pol), "--timeout", "0.1", cwd=tmp_path)
+    took = time.perf_counter() - t0
+    assert out.returncode == 1, out.stderr
+    line = out.stderr.strip()
+    assert line.count("\n") == 0 and line.startswith(f"not checked: {pol}: time limit of 0.1 s")
+    assert "no verdict" in line and "valid" not in out.stdout
+    assert took < 0.1 * 1.1 + 0.5 + 3  # start-up (a fresh interpreter) generously
+
+
+def test_validate_has_the_problems_limits_and_checks_in_time_when_they_allow(
+        tmp_path: Path) -> None:
+    r = ehatp.solve(ehatp.load(CUBES / "p2.toml"))
+    assert r.policy is not None
+    pol = tmp_path / "p.json"
+    r.policy.write(pol)
+    out = _cli("validate", str(CUBES / "p2.toml"), str(pol), "--timeout", "60",
+               "--max-memory", "2G", cwd=tmp_path)
+    assert out.returncode == 0 and out.stdout.startswith("valid:"), out.stderr
+
+
+def test_the_watchdog_ends_work_that_cannot_stop_itself(tmp_path: Path) -> None:
+    # the body ignores every budget (native code would): the backstop ends the process with
+    # the command's exit code and one line, within the slack
+    code = ("import time\nfrom ehatp.cli.limits import STANDALONE, guarded\n"
+            "with guarded(STANDALONE, 'stuck work', 0.5, None, 7):\n    time.sleep(30)\n")
+    src = str(Path(__file__).resolve().parents[1] / "src")
+    t0 = time.perf_counter()
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=60, env={**os.environ, "PYTHONPATH": src})
+    took = time.perf_counter() - t0
+    assert out.returncode == 7
+    assert out.stderr.strip() == ("stuck work: stopped, time limit of 0.5 s reached after "
+                                  f"{out.stderr.split('after ')[1].split(' s')[0]} s, where "
+                                  "the work could not stop itself; raise the limit")
+    assert 0.5 * 1.1 + 0.75 <= took < 0.5 * 1.1 + 0.75 + 3
+
+
+def test_the_watchdog_watches_resident_memory(tmp_path: Path) -> None:
+    code = ("from ehatp.cli.limits import STANDALONE, guarded\nimport time\n"
+            "with guarded(STANDALONE, 'greedy work', None, 200 << 20, 7):\n"
+            "    hog = [bytearray(1 << 20) for _ in range(400)]\n    time.sleep(30)\n")
+    src = str(Path(__file__).resolve().parents[1] / "src")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=60, env={**os.environ, "PYTHONPATH": src})
+    assert out.returncode == 7
+    assert "greedy work: stopped, memory limit of 200 MB reached" in out.stderr

@@ -50,6 +50,8 @@ from .model.options import (
 from .model.problem import BeliefWorld, Costs, Limits, Problem
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
     from .check.validator import Report
     from .formats.render import Explorer
     from .run.executor import Executor
@@ -58,12 +60,14 @@ if TYPE_CHECKING:
 __version__ = "0.3.0"
 
 
-def validate(problem: Problem, policy: Policy) -> "Report":
+def validate(problem: Problem, policy: Policy, *,
+             check: "Callable[[], None] | None" = None) -> "Report":
     """Check ``policy`` against ``problem`` with the independent validator (loaded on first
-    use, so that ``import ehatp`` and ``ehatp --help`` stay quick)."""
+    use, so that ``import ehatp`` and ``ehatp --help`` stay quick). ``check``, e.g. a
+    ``Budget``'s, is called now and then and may raise to stop the check (no verdict)."""
     from .check.validator import validate as _validate
 
-    return _validate(problem, policy)
+    return _validate(problem, policy, check=check)
 
 
 def explore(policy: Policy) -> "Explorer":

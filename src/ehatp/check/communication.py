@@ -41,8 +41,8 @@ class Semantics(Rules):
     """The rules of docs/semantics.md §1-§6 over one grounded problem: :class:`Rules` and
     communication (§5)."""
 
-    def __init__(self, problem: Problem) -> None:
-        super().__init__(problem)
+    def __init__(self, problem: Problem, check: Callable[[], None] | None = None) -> None:
+        super().__init__(problem, check)
         # §3: shown the informing set a policy's inform tells when name order chose it among
         # sets equally good on everything else (a lifted policy's check watches it)
         self.ties: Callable[[tuple[int, ...], list[tuple[int, ...]]], None] | None = None

@@ -11,7 +11,7 @@ moves. The values and the summary are :mod:`.summary`'s.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from fractions import Fraction
 
@@ -89,10 +89,11 @@ class Replay:
     the summary (:mod:`.summary`) need of the walk: the goals reached, each checked move's
     cost and weight, who moves at each checked node, and the branches checked."""
 
-    def __init__(self, problem: Problem, policy: Policy) -> None:
+    def __init__(self, problem: Problem, policy: Policy,
+                 check: Callable[[], None] | None = None) -> None:
         self.problem = problem
         self.policy = policy
-        self.sem = Semantics(problem)
+        self.sem = Semantics(problem, check)
         self.violations: list[str] = []
         self.nodes_checked = 0
         self.goals_reached: set[int] = set()  # goal leaves whose branch checked out
@@ -399,6 +400,8 @@ class Replay:
             it = stack.pop()
             node = it.node
             self.nodes_checked += 1
+            if not self.nodes_checked & 63:
+                self.sem.check()
             kids_ok = self.visit(node, it.es, it.path, it.move, it.via)
             goes_on = self.goes_on.setdefault(node.id, [])
             for j, st in reversed(kids_ok):

@@ -123,12 +123,20 @@ def _dedupe(xs: Iterable[_T]) -> list[_T]:
 
 
 
+def _no_check() -> None:
+    """The check of a validation without limits: nothing."""
+
+
 class Rules:
     """The rules of docs/semantics.md §1-§4 and §6 over one grounded problem."""
 
-    def __init__(self, problem: Problem) -> None:
+    def __init__(self, problem: Problem, check: Callable[[], None] | None = None) -> None:
         self.p = problem
-        self.grounded: Grounded = ground_problem(problem)
+        # called now and then while grounding and refining: a time or memory limit of the
+        # caller's may raise from it to stop the check (the validator knows no limits itself)
+        self.check: Callable[[], None] = check if check is not None else _no_check
+        self._steps = 0
+        self.grounded: Grounded = ground_problem(problem, check)
         self.names = (problem.domain.robot_name, problem.domain.human_name)
         self.K = problem.K
         self.atom_of = {a: i for i, a in enumerate(self.grounded.atoms)}
@@ -163,6 +171,9 @@ class Rules:
         def go(ag: Agenda, depth: int, opened: tuple[tuple[int, Agenda], ...]) -> None:
             if depth > 10_000:
                 raise RecursionError("refinement does not terminate")
+            self._steps += 1
+            if not self._steps & 1023:
+                self.check()
             if not ag:
                 out.append((FINISH, ()))
                 return

@@ -45,6 +45,7 @@ and gives the verdict.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from ..formats.policy import Policy
@@ -77,7 +78,8 @@ class Report:
         return self.message
 
 
-def validate(problem: Problem, policy: Policy, lifted: Lifted | None = None) -> Report:
+def validate(problem: Problem, policy: Policy, lifted: Lifted | None = None, *,
+             check: Callable[[], None] | None = None) -> Report:
     """Check ``policy`` against ``problem``: every rule of docs/semantics.md, §1-§7 (see the
     module docstring). The steps: the policy's header (:func:`_header`), its recorded costs
     and objective, the opening moves and the walk from the root (:class:`~.replay.Replay`),
@@ -86,8 +88,12 @@ def validate(problem: Problem, policy: Policy, lifted: Lifted | None = None) -> 
     A lifted policy (format version 3: its ``symmetry`` table, or ``lifted`` given apart) is
     checked on its canonical nodes, never expanded (:mod:`.lifted`): each renaming it uses is
     an automorphism of the problem, the root is the initial node renamed by
-    ``renamings[root]``, and each edge's renaming maps the successor onto its child."""
-    rp = Replay(problem, policy)
+    ``renamings[root]``, and each edge's renaming maps the successor onto its child.
+
+    ``check`` is called now and then while grounding, refining and walking the policy (every
+    few hundred steps); a caller's time or memory limit raises from it to stop the check,
+    and the exception goes through unchanged: a stopped check is no verdict."""
+    rp = Replay(problem, policy, check)
     nodes = policy.nodes
     if not nodes or not _header(rp):
         return _report(rp, None)

@@ -28,6 +28,7 @@ from typer.core import TyperCommand
 
 from .. import __version__
 from .common import Commands, PipeClosed, is_broken_pipe, quiet_exit_broken_pipe
+from .limits import STANDALONE
 
 
 class Entry(NamedTuple):

@@ -92,6 +92,7 @@ def solve(problem: Problem, **kwargs: Any) -> Result:
 
 @app.command("solve")
 def solve_cmd(
+    ctx: typer.Context,
     problem: Annotated[Path, typer.Argument(
         help="Problem file (TOML), e.g. examples/cubes/p1.toml.", metavar="PROBLEM.toml",
         show_default=False)],
@@ -153,12 +154,16 @@ def solve_cmd(
     console = stderr_console()
     live = LiveProgress(console, printable(prob.name)) if console is not None else None
     target = out if out is not None else Path(f"{problem.stem}.policy.json")
+    from .limits import guarded
+
     try:
-        with user_errors(problem):
-            result = solve(prob, max_states=max_states, max_depth=max_depth, progress=live,
-                           budget=budget, symmetry=False if no_symmetry else None,
-                           expand=expand)
-        result, written = _write(result, target, budget)
+        with guarded(ctx.obj, f"solve {problem}", budget.timeout, budget.max_memory,
+                     EXIT_NO_POLICY):
+            with user_errors(problem):
+                result = solve(prob, max_states=max_states, max_depth=max_depth,
+                               progress=live, budget=budget,
+                               symmetry=False if no_symmetry else None, expand=expand)
+            result, written = _write(result, target, budget)
     finally:
         if live is not None:
             live.close()

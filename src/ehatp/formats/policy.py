@@ -17,8 +17,11 @@ imported in IPython; docs/notebook.md).
 
 from __future__ import annotations
 
+import contextlib
 import json
+import os
 import re
+import secrets
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -314,9 +317,8 @@ class Policy:
 
     # -- JSON ---------------------------------------------------------------------------------
 
-    def to_dict(self, check: Callable[[], None] | None = None) -> dict[str, Any]:
-        """The file's JSON object; ``check`` (e.g. a time limit's) is called every few
-        hundred nodes and may raise to stop the work."""
+    def _header(self) -> dict[str, Any]:
+        """The file's JSON object without its nodes."""
         return {
             "format": FORMAT, "version": self.version, "problem": self.problem,
             "domain": self.domain,
@@ -326,33 +328,60 @@ class Policy:
             "objective": self.objective,
             "worst_case": None if self.worst_case is None else num(self.worst_case),
             "expected": None if self.expected is None else num(self.expected),
-            "nodes": [n.to_dict() for n in _checked(self.nodes, check)],
             **({"symmetry": self.symmetry} if self.symmetry is not None else {}),
         }
 
+    def to_dict(self, check: Callable[[], None] | None = None) -> dict[str, Any]:
+        """The file's JSON object; ``check`` (e.g. a time limit's) is called every few
+        hundred nodes and may raise to stop the work."""
+        return {**self._header(),
+                "nodes": [n.to_dict() for n in _checked(self.nodes, check)]}
+
+    def iter_json(self, check: Callable[[], None] | None = None) -> Iterator[str]:
+        """The file's text in pieces, a node at a time, so a writer never holds the whole text:
+        keys sorted, one node per line, so the same policy always gives the same bytes.
+        ``check`` as in :meth:`to_dict`."""
+        head = self._header()
+        keys = sorted([*head, "nodes"])
+        yield "{\n"
+        for i, key in enumerate(keys):
+            end = ",\n" if i + 1 < len(keys) else "\n"
+            if key != "nodes":
+                yield f" {json.dumps(key)}: {_dumps(head[key])}{end}"
+                continue
+            yield ' "nodes": [\n'
+            last = len(self.nodes) - 1
+            for j, n in enumerate(_checked(self.nodes, check)):
+                yield f"  {_dumps(n.to_dict())}{',' if j < last else ''}\n"
+            yield f" ]{end}"
+        yield "}\n"
+
     def to_json(self, check: Callable[[], None] | None = None) -> str:
-        """The file's text: keys sorted, one node per line, so the same policy always gives
-        the same bytes. ``check`` as in :meth:`to_dict`."""
-        d = self.to_dict(check)
-        parts = []
-        for key in sorted(d):
-            if key == "nodes":
-                body = ",\n".join(f"  {_dumps(n)}" for n in _checked(d["nodes"], check))
-                parts.append(f' "nodes": [\n{body}\n ]')
-            else:
-                parts.append(f" {json.dumps(key)}: {_dumps(d[key])}")
-        return "{\n" + ",\n".join(parts) + "\n}\n"
+        """The file's text (:meth:`iter_json` joined). ``check`` as in :meth:`to_dict`."""
+        return "".join(self.iter_json(check))
 
     def write(self, path: str | Path, check: Callable[[], None] | None = None) -> None:
-        """Write :meth:`to_json` to ``path``; ``check`` as in :meth:`to_dict` (the file is not
-        touched when it stops the work)."""
-        Path(path).write_text(self.to_json(check), encoding="utf-8")
+        """Write :meth:`iter_json` to ``path`` atomically: streamed, a node at a time, into a
+        new file beside it that then replaces ``path``, so a reader never sees half a policy
+        and the text is never held whole. ``check`` as in :meth:`to_dict`: when it stops the
+        work, ``path`` is left as it was and the partial file removed."""
+        path = Path(path)
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
+        try:
+            with open(tmp, "x", encoding="utf-8") as fh:
+                for piece in self.iter_json(check):
+                    fh.write(piece)
+            os.replace(tmp, path)
+        except BaseException:
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+            raise
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> Policy:
+    def from_dict(cls, d: dict[str, Any], check: Callable[[], None] | None = None) -> Policy:
         """A policy from its JSON object, version 3, 2 or 1 (a version 1 tree becomes a graph
         with one node per tree node; a version 3 policy stays lifted). Trusts the shapes:
-        :meth:`load` checks them."""
+        :meth:`load` checks them. ``check`` as in :meth:`to_dict`."""
         if d.get("format") != FORMAT:
             raise ValueError(f"not an ehatp policy (format is {d.get('format')!r})")
         version = d.get("version")
@@ -362,7 +391,7 @@ class Policy:
         raw = d["nodes"]
         if not isinstance(raw, list):
             raise TypeError("nodes must be a list")
-        nodes = _nodes_v1(raw) if version == 1 else [_node(n) for n in raw]
+        nodes = _nodes_v1(raw) if version == 1 else [_node(n) for n in _checked(raw, check)]
         return cls(d["problem"], d["domain"], d["agents"], d["K"], d["costs"], nodes, d["cost"],
                    d["communications"], d["leaves"], d.get("optimal", True), d.get("stats", {}),
                    d.get("after", []), d.get("objective", {"kind": "worst-case"}),
@@ -374,9 +403,10 @@ class Policy:
         return cls.from_dict(json.loads(Path(path).read_text(encoding="utf-8")))
 
     @classmethod
-    def load(cls, path: str | Path) -> Policy:
+    def load(cls, path: str | Path, check: Callable[[], None] | None = None) -> Policy:
         """Read a policy file written by ``ehatp solve``, checking its graph; anything else is
-        one :class:`~ehatp.errors.InputError` line naming the file."""
+        one :class:`~ehatp.errors.InputError` line naming the file. ``check`` as in
+        :meth:`to_dict`."""
         name = str(path)
         try:
             text = Path(path).read_text(encoding="utf-8")
@@ -397,7 +427,7 @@ class Policy:
             raise InputError(name, "", "not an ehatp policy (expected a JSON object)",
                              POLICY_FIX)
         try:
-            policy = cls.from_dict(raw)
+            policy = cls.from_dict(raw, check)
         except ValueError as e:
             raise InputError(name, "", str(e), POLICY_FIX) from None
         except KeyError as e:

@@ -20,16 +20,20 @@ from ..model.problem import Problem
 from .policy import POLICY_FIX, Policy, malformed
 
 
-def read_policy(path: Path | str, *, counts: bool = True) -> Policy:
+def read_policy(path: Path | str, *, counts: bool = True,
+                check: Callable[[], None] | None = None) -> Policy:
     """Read and check a policy file (version 3 or 2; 1 turned into a graph): the JSON against
     the format's schema first (:func:`check_schema`: nothing reads a field before its shape is
     known), then :meth:`Policy.load`, then the type of every field the tools read and
     (``counts``) whether the header's counts and the moves' agents match the graph, so a
     hand-edited or truncated file is one :class:`InputError` line instead of a wrong display
-    or a crash. (``validate`` leaves the counts to the validator.)"""
+    or a crash. (``validate`` leaves the counts to the validator.) ``check``, e.g. a time
+    limit's, is called between the steps and every few hundred nodes, and may raise."""
     check_schema(path)
+    if check is not None:
+        check()
     try:
-        policy = Policy.load(path)
+        policy = Policy.load(path, check)
     except (AttributeError, TypeError, KeyError, ValueError, IndexError, RecursionError) as e:
         # the format reader trusts the JSON's shapes; anything it trips on is the file's fault
         place, what = _shape(path) or ("", f"malformed policy ({type(e).__name__}: {e})")
