@@ -572,8 +572,12 @@ def _resolve_domain(r: TomlReader, t: Mapping[str, Any], base: Path) -> Domain:
     try:
         dom = obj(**options)
     except (Exception, SystemExit) as e:
-        what = "bad domain option" if options and isinstance(e, ValueError | TypeError) else ""
-        raise _failure(r, ref, e, files, what) from None
+        # the call itself refused the options (no frame of the factory ran): the file's fault;
+        # anything the factory raised, whatever its type, is the domain's own error
+        refused = isinstance(e, TypeError) and (e.__traceback__ is None
+                                                or e.__traceback__.tb_next is None)
+        what = "bad domain options" if options and refused else ""
+        raise _failure(r, ref, e, files, what, options) from None
     if not isinstance(dom, Domain):
         raise r.err("[domain] name", f"{ref!r} gave {type(dom).__name__}, not a Domain",
                     "return a Domain from the factory")
@@ -703,8 +707,12 @@ def _code_place(e: BaseException, files: set[str]) -> str:
 
 
 def _failure(r: TomlReader, ref: str, e: BaseException, files: set[str],
-             what: str = "") -> InputError:
-    """Anything a domain module raises, as one line: where in its code, and what."""
+             what: str = "", options: Mapping[str, Any] | None = None) -> InputError:
+    """Anything a domain module raises, as one line: where in its code, and what. ``what``
+    (``"bad domain options"``) says the call itself refused ``options``, before any of the
+    domain's code ran; otherwise the error is the domain's, at the last line of its code the
+    traceback passes through, and the options it was called with are named, since one of them
+    may be what it refuses."""
     at = _code_place(e, files)
     at = f" at {at}" if at else ""
     if isinstance(e, SyntaxError):
@@ -713,9 +721,14 @@ def _failure(r: TomlReader, ref: str, e: BaseException, files: set[str],
         detail = str(e)
     else:
         detail = f"{type(e).__name__}: {e}" if str(e) else type(e).__name__
-    if what:  # the factory refused an option: where in its code does not help
+    if what:  # the call refused the options: there is no line of the domain's to show
         return r.err("[domain]", f"{what} for {ref!r}: {detail}", "fix the option")
     verb = "is malformed" if isinstance(e, DomainError) else "failed"
+    if options:
+        given = ", ".join(f"{k} = {v!r:.40}" for k, v in options.items())
+        return r.err("[domain] name", f"domain {ref!r} {verb}{at}, called with {given}: "
+                     f"{detail}", "that is the domain's own error: fix its code there, or the "
+                     "[domain] option it refuses", ref)
     return r.err("[domain] name", f"domain {ref!r} {verb}{at}: {detail}",
                  "fix the domain module (it is Python code, run as such)", ref)
 
