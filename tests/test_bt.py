@@ -43,17 +43,20 @@ def shared(policy: Policy) -> set[int]:
 
 
 def robot_items(m: Any) -> list[tuple[Any, ...]]:
-    """A robot move as what the robot does, in order."""
+    """A robot move as what the robot does, in order, each item ending with the label of the
+    move it completes (the last one) or None."""
     said = [("say", tuple(m.told))] if m.told else []
     if m.kind == "inform":
-        return [("say", tuple(m.args))]
-    if m.kind == "silence":
-        return [("silence",)]
-    if m.kind == "wait":
-        return [*said, ("wait",)]
-    assert m.kind == "action", m
-    label = m.action.split(" + ")[-1]
-    return [*said, ("action", label, m.name, tuple(m.args))]
+        items = [("say", tuple(m.args))]
+    elif m.kind == "silence":
+        items = [("silence",)]
+    elif m.kind == "wait":
+        items = [*said, ("wait",)]
+    else:
+        assert m.kind == "action", m
+        label = m.action.split(" + ")[-1]
+        items = [*said, ("action", label, m.name, tuple(m.args))]
+    return [(*x, m.action if i == len(items) - 1 else None) for i, x in enumerate(items)]
 
 
 def policy_shape(policy: Policy) -> dict[str, list[tuple[Any, ...]]]:
@@ -102,13 +105,14 @@ def xml_shape(text: str) -> dict[str, list[tuple[Any, ...]]]:
             a = e.attrib
             if e.tag == "Say":
                 assert a["kind"] == "inform", a
-                out.append(("say", split(a.get("literals"))))
+                out.append(("say", split(a.get("literals")), a.get("completes")))
             elif e.tag == "RobotAction":
-                out.append(("action", a["action"], a["action_name"], split(a["args"])))
+                out.append(("action", a["action"], a["action_name"], split(a["args"]),
+                            a.get("completes")))
             elif e.tag == "RobotWait":
-                out.append(("wait",))
+                out.append(("wait", a.get("completes")))
             elif e.tag == "Silence":
-                out.append(("silence",))
+                out.append(("silence", a.get("completes")))
             elif e.tag == "SubTree":
                 assert i == len(elems) - 1
                 out.append(("subtree", int(a["ID"].removeprefix("Node_"))))
@@ -117,7 +121,9 @@ def xml_shape(text: str) -> dict[str, list[tuple[Any, ...]]]:
                 out.append(("goal", int(a["node"])))
             elif e.tag == "WaitHumanAction":
                 fallback = elems[i + 1]
-                assert fallback.tag == "Fallback" and i + 2 == len(elems)
+                # a choice of one move: the policy goes on after the Fallback, not inside it
+                flat = len(fallback) == 2
+                assert fallback.tag == "Fallback" and (flat or i + 2 == len(elems))
                 key = a["action"]
                 assert key.startswith("{") and key.endswith("}")
                 *covered, last = list(fallback)
@@ -130,6 +136,9 @@ def xml_shape(text: str) -> dict[str, list[tuple[Any, ...]]]:
                     if rest and rest[0].tag == "Say" and rest[0].attrib["kind"] == "answer":
                         answer = ("answer", rest[0].attrib["question"])
                         rest = rest[1:]
+                    if flat:
+                        assert rest == []
+                        rest = elems[i + 2:]
                     branches.append((did.attrib["action"], answer, tuple(chain(rest))))
                 assert split(a["expected"]) == tuple(x[0] for x in branches)
                 report, fail = list(last)
@@ -149,6 +158,28 @@ def xml_shape(text: str) -> dict[str, list[tuple[Any, ...]]]:
         assert seq.tag == "Sequence"
         out[tree.attrib["ID"]] = chain(list(seq))
     return out
+
+
+def inlined(trees: dict[str, list[tuple[Any, ...]]], share: set[int]
+            ) -> dict[str, list[tuple[Any, ...]]]:
+    """Return ``trees`` (:func:`xml_shape`) with every tree of a node the policy does not share
+    (a long branch cut to keep the XML shallow) put back where its one SubTree is."""
+    cut = {int(t.removeprefix("Node_")) for t in trees if t != "Policy"} - share
+
+    def put(items: list[tuple[Any, ...]]) -> list[tuple[Any, ...]]:
+        out: list[tuple[Any, ...]] = []
+        for item in items:
+            if item[0] == "subtree" and item[1] in cut:
+                out += put(trees[f"Node_{item[1]}"])
+            elif item[0] == "human":
+                out.append(("human", item[1], tuple((action, answer, tuple(put(list(rest))))
+                                                    for action, answer, rest in item[2])))
+            else:
+                out.append(item)
+        return out
+
+    return {t: put(items) for t, items in trees.items() if t == "Policy" or
+            int(t.removeprefix("Node_")) not in cut}
 
 
 @pytest.mark.parametrize("example", EXAMPLES, ids=str)

@@ -42,46 +42,56 @@ class BTFormat(StrEnum):
     py_trees = "py_trees"
 
 
-# The custom nodes: (kind, ID, description, [(port direction, name, description)]).
-CUSTOM_NODES: tuple[tuple[str, str, str, tuple[tuple[str, str, str], ...]], ...] = (
+# The custom nodes: (kind, ID, description, ports). A port is (direction, name, description,
+# default): every port is a std::string, and one with a default (None: none) is optional -- the
+# export leaves it out where the default is meant -- so that BehaviorTree.CPP's generated
+# schema (writeTreeXSD) does not require it.
+Port = tuple[str, str, str, str | None]
+_COMPLETES: Port = (
+    "input", "completes", "the label of the policy's robot move this node finishes (the point "
+    "where an ehatp Executor is told robot_action_done); empty: it finishes none (a Say said "
+    "before the action it goes with, or an answer to the human's question)", "")
+CUSTOM_NODES: tuple[tuple[str, str, str, tuple[Port, ...]], ...] = (
     ("Action", "RobotAction", "The robot does one action of its domain.", (
-        ("input", "action", "the action as the policy prints it, e.g. place(r, box1)"),
-        ("input", "action_name", "the action's name, e.g. place"),
-        ("input", "args", "its arguments, separated by ';'"),
+        ("input", "action", "the action as the policy prints it, e.g. place(r, box1)", None),
+        ("input", "action_name", "the action's name, e.g. place", None),
+        ("input", "args", "its arguments, separated by ';'", ""),
+        _COMPLETES,
     )),
-    ("Action", "RobotWait", "The robot waits: it lets the human take a turn.", ()),
+    ("Action", "RobotWait", "The robot waits: it lets the human take a turn.", (_COMPLETES,)),
     ("Action", "Say", "The robot speaks: it informs the human of literals, answers the "
      "human's question truthfully, asks the human what it is about to do, or announces what "
      "it is doing itself.", (
-        ("input", "kind", "inform, answer, ask or announce"),
-        ("input", "literals", "inform: the literals told, separated by ';'"),
+        ("input", "kind", "inform, answer, ask or announce", None),
+        ("input", "literals", "inform: the literals told, separated by ';'", ""),
         ("input", "question", "answer: the question asked; ask: what the robot asks about "
-         "(intention)"),
-        ("input", "answer", "answer: yes or no (absent when the export did not know: the "
-         "robot answers from what it knows)"),
+         "(intention)", ""),
+        ("input", "answer", "answer: yes or no (empty when the export did not know: the "
+         "robot answers from what it knows)", ""),
         ("input", "intention", "announce: the robot's tasks as it announces them, e.g. "
-         "clean(room), tidy(desk)"),
+         "clean(room), tidy(desk)", ""),
+        _COMPLETES,
     )),
     ("Action", "Silence", "The robot stays silent where it could speak (the speech opening "
-     "before the human's first move); it does nothing.", ()),
+     "before the human's first move); it does nothing.", (_COMPLETES,)),
     ("Action", "WaitHumanAction", "Runs until the human acts, then writes the action observed "
      "(as the policy prints it) to its output port.", (
-        ("output", "action", "the human's action, e.g. pick(w) or pass"),
-        ("input", "expected", "the actions the policy covers here, separated by ';'"),
+        ("output", "action", "the human's action, e.g. pick(w) or pass", None),
+        ("input", "expected", "the actions the policy covers here, separated by ';'", None),
     )),
     ("Condition", "HumanDid", "Succeeds when the observed human action is this one (spaces "
      "ignored).", (
-        ("input", "observed", "the action WaitHumanAction observed"),
-        ("input", "action", "the action of this branch"),
+        ("input", "observed", "the action WaitHumanAction observed", None),
+        ("input", "action", "the action of this branch", None),
     )),
     ("Action", "ReportUncovered", "Reports that the human did something the policy does not "
      "cover (unless the observed action is one of expected: a branch for it ran and failed "
      "below, where that was reported), then succeeds.", (
-        ("input", "observed", "the action WaitHumanAction observed"),
-        ("input", "expected", "the actions the policy covers here, separated by ';'"),
+        ("input", "observed", "the action WaitHumanAction observed", None),
+        ("input", "expected", "the actions the policy covers here, separated by ';'", None),
     )),
     ("Action", "GoalReached", "The task is done (a goal of the policy); succeeds.", (
-        ("input", "node", "the policy node reached"),
+        ("input", "node", "the policy node reached", None),
     )),
 )
 CUSTOM_IDS = frozenset(c[1] for c in CUSTOM_NODES)
@@ -95,23 +105,39 @@ def shared_nodes(policy: Policy) -> list[int]:
     return [i for i, n in enumerate(into) if n > 1]
 
 
+# BehaviorTree.CPP refuses a tree nested deeper than 256 elements (its XML parser's limit). A
+# human choice with several covered moves nests its branches two levels deeper (Fallback, then
+# the branch's Sequence); past MAX_NESTED_CHOICES of them in one tree, a branch goes on in a
+# tree of its own (a SubTree), so that no tree is deeper than MAX_DEPTH however long the policy.
+BTCPP_MAX_DEPTH = 256
+MAX_NESTED_CHOICES = 60
+# BehaviorTree 0, its Sequence 1, a choice's Fallback 2 + 2k below k choices, at the last one
+# its branch's Sequence and that Sequence's children
+MAX_DEPTH = 4 + 2 * MAX_NESTED_CHOICES
+
+
 def from_policy(policy: Policy, answers: dict[tuple[int, str], bool] | None = None) -> Forest:
-    """The behaviour tree of ``policy``. ``answers`` maps (policy node, question asked there)
-    to the robot's truthful answer (:func:`answers_of`); without it the ``Say`` of an answer
-    leaves the answer to the robot. A lifted policy (format version 3) is expanded first
+    """Return the behaviour tree of ``policy``. ``answers`` maps (policy node, question asked
+    there) to the robot's truthful answer (:func:`answers_of`); without it the ``Say`` of an
+    answer leaves the answer to the robot. A lifted policy (format version 3) is expanded first
     (:func:`~ehatp.formats.lifted.expanded`; give the expansion of
-    :func:`ehatp.run.expand.expand_policy` when ``answers`` come from :func:`answers_of`)."""
+    :func:`ehatp.run.expand.expand_policy` when ``answers`` come from :func:`answers_of`).
+
+    A human choice with one covered move does not nest: its ``Fallback`` holds the check of
+    that move (and the robot's answer), and the policy goes on after it in the same
+    ``Sequence``. Past ``MAX_NESTED_CHOICES`` nested choices with several moves, a branch goes
+    on in a tree of its own, so every tree is at most ``MAX_DEPTH`` elements deep."""
     policy = expanded(policy)
-    shared = set(shared_nodes(policy))
+    own = set(shared_nodes(policy))  # the nodes with a tree of their own
     robot = policy.agents["robot"]
     answers = answers or {}
 
-    def chain(n: int, top: int) -> list[BTNode]:
-        """The nodes that execute the policy from node ``n``, in a sequence, within the tree
-        of node ``top``."""
+    def chain(n: int, top: int, nested: int) -> list[BTNode]:
+        """Return the nodes that execute the policy from node ``n``, in a sequence, within the
+        tree of node ``top``, below ``nested`` human choices of several moves."""
         out: list[BTNode] = []
         while True:
-            if n != top and n in shared:
+            if n != top and n in own:
                 out.append(BTNode("SubTree", {"ID": tree_id(n)}))
                 return out
             node = policy.nodes[n]
@@ -125,6 +151,9 @@ def from_policy(policy: Policy, answers: dict[tuple[int, str], bool] | None = No
                 continue
             key = "{" + blackboard_key(n) + "}"
             expected = SEP.join(m.action for m in node.moves)
+            flat = len(node.moves) == 1
+            if not flat and nested == MAX_NESTED_CHOICES:  # the branches go on in trees of
+                own.update(m.to for m in node.moves if policy.nodes[m.to].moves)  # their own
             branches = []
             for m in node.moves:
                 said = []
@@ -134,9 +163,9 @@ def from_policy(policy: Policy, answers: dict[tuple[int, str], bool] | None = No
                     if yes is not None:
                         attrs["answer"] = "yes" if yes else "no"
                     said.append(BTNode("Say", attrs))
+                rest = [] if flat else chain(m.to, top, nested + 1)
                 branches.append(BTNode("Sequence", {"name": f"{m.agent} {m.action}"}, [
-                    BTNode("HumanDid", {"observed": key, "action": m.action}), *said,
-                    *chain(m.to, top)]))
+                    BTNode("HumanDid", {"observed": key, "action": m.action}), *said, *rest]))
             branches.append(BTNode("Sequence", {"name": "uncovered"}, [
                 BTNode("ReportUncovered", {"observed": key, "expected": expected}),
                 BTNode("AlwaysFailure")]))
@@ -144,12 +173,19 @@ def from_policy(policy: Policy, answers: dict[tuple[int, str], bool] | None = No
             out.append(BTNode("WaitHumanAction", {"action": key, "expected": expected}))
             out.append(BTNode("Fallback", {"name": f"{who}'s choice at node {n}"}, branches,
                               node=n))
-            return out
+            if not flat:
+                return out
+            n = node.moves[0].to
 
-    trees = {MAIN_TREE: BTNode("Sequence", {"name": "node 0"}, chain(0, 0))}
-    for s in sorted(shared):
-        trees[tree_id(s)] = BTNode("Sequence", {"name": f"node {s}"}, chain(s, s))
-    return Forest(MAIN_TREE, trees, policy)
+    trees = {MAIN_TREE: BTNode("Sequence", {"name": "node 0"}, chain(0, 0, 0))}
+    done: set[int] = set()
+    while todo := sorted(own - done):  # a tree may send branches to trees of their own
+        for s in todo:
+            trees[tree_id(s)] = BTNode("Sequence", {"name": f"node {s}"}, chain(s, s, 0))
+        done.update(todo)
+    ordered = {MAIN_TREE: trees[MAIN_TREE]}
+    ordered.update((tree_id(s), trees[tree_id(s)]) for s in sorted(done))
+    return Forest(MAIN_TREE, ordered, policy)
 
 
 def robot_nodes(m: PolicyMove) -> list[BTNode]:
@@ -243,6 +279,8 @@ def _comment(text: str) -> str:
 def _write(node: BTNode, depth: int, out: list[str]) -> None:
     pad = "  " * depth
     attrs = "".join(f" {k}={_attr(v)}" for k, v in node.attrs.items())
+    if node.completes is not None:
+        attrs += f" completes={_attr(node.completes)}"
     if not node.children:
         out.append(f"{pad}<{node.tag}{attrs}/>")
         return
@@ -269,9 +307,10 @@ def to_btcpp(forest: Forest) -> str:
     for kind, nid, desc, ports in CUSTOM_NODES:
         out.append(f"    <{kind} ID={_attr(nid)}>")
         out.append(f"      {_comment(desc)}")
-        for direction, name, pdesc in ports:
-            out.append(f"      <{direction}_port name={_attr(name)}>{escape(pdesc)}"
-                       f"</{direction}_port>")
+        for direction, name, pdesc, default in ports:
+            dflt = "" if default is None else f" default={_attr(default)}"
+            out.append(f'      <{direction}_port name={_attr(name)} type="std::string"{dflt}>'
+                       f"{escape(pdesc)}</{direction}_port>")
         out.append(f"    </{kind}>")
     out.append("  </TreeNodesModel>")
     out.append("</root>")
@@ -386,6 +425,7 @@ def to_py_trees_source(forest: Forest) -> str:
     return "\n".join(out) + "\n"
 
 
-__all__ = ["CUSTOM_IDS", "CUSTOM_NODES", "MAIN_TREE", "BTFormat", "BTNode", "Forest",
+__all__ = ["BTCPP_MAX_DEPTH", "CUSTOM_IDS", "CUSTOM_NODES", "MAIN_TREE", "MAX_DEPTH",
+           "MAX_NESTED_CHOICES", "BTFormat", "BTNode", "Forest", "Port",
            "answers_of", "blackboard_key", "build_py_tree", "from_policy", "shared_nodes",
            "to_btcpp", "to_py_trees_source", "tree_id"]
