@@ -40,7 +40,16 @@ def session(ex: Executor, stdin: str, **kw: Any) -> tuple[int, list[dict[str, An
     """Run the protocol in-process; every output line must be one JSON object."""
     out = io.StringIO()
     code = run(ex, io.StringIO(stdin), json_lines(out), **kw)
-    return code, [json.loads(x) for x in out.getvalue().splitlines()]
+    return code, numbered(out.getvalue())
+
+
+def numbered(stdout: str) -> list[dict[str, Any]]:
+    """The output lines as objects, once each is checked to end with its number ("seq": 1,
+    2, ...), which is then dropped."""
+    msgs = [json.loads(x) for x in stdout.splitlines()]
+    assert [list(m)[-1] for m in msgs] == ["seq"] * len(msgs)
+    assert [m.pop("seq") for m in msgs] == list(range(1, len(msgs) + 1))
+    return msgs
 
 
 def kinds(msgs: list[dict[str, Any]]) -> list[str]:
@@ -62,7 +71,7 @@ def test_scripted_session_replans_and_reaches_the_goal(tmp_path: Path) -> None:
                   stdin=script)
     assert r.returncode == 0, r.stderr
     assert r.stderr == ""
-    msgs = [json.loads(x) for x in r.stdout.splitlines()]
+    msgs = numbered(r.stdout)
     assert kinds(msgs) == ["start", "beliefs", "robot",
                            "step", "beliefs", "waiting",
                            "replanned", "step", "beliefs", "robot",

@@ -3,14 +3,18 @@ robot process speaks with ehatp running as its subprocess.
 
 A robot process (a ROS node, a C++ controller) starts ``ehatp execute PROBLEM --policy P.json``
 and talks to it through stdin and stdout, one JSON object a line. In: what the human did
-(``{"human": "pick(w)"}``) and that the robot is done (``{"robot_done": "pick(r)"}`` or
-``{"robot_done": true}``). Out: what the robot should do (``{"robot": {...}}``), that the human
-is to act (``{"waiting": {...}}``), what the human now believes (``{"beliefs": {...}}``), the goal
-(``{"goal": true, ...}``) and errors (``{"error": KIND, ...}``). With ``--replan`` a human action
-the policy does not cover, but the human model allows, is applied and the robot replans from
-there (``{"replanned": {...}}``): a move the model allows, or a ``pass`` the fairness rule lets
-a policy leave out (docs/semantics.md §4); only an impossible move is an error. See
-``docs/execution.md``.
+(``{"human": "pick(w)"}``), that the robot is done (``{"robot_done": "pick(r)"}`` or
+``{"robot_done": true}``), or that its action failed (``{"robot_failed": "pick(r)"}``: it did
+not happen; ``{"robot_failed": {"action": "pick(r)", "observed": [...]}}``: it had another
+outcome, the facts observed). Out: what the robot should do (``{"robot": {...}}``), that the
+human is to act (``{"waiting": {...}}``), what the human now believes (``{"beliefs": {...}}``),
+the goal (``{"goal": true, ...}``) and errors (``{"error": KIND, ...}``), each with its number
+(``"seq"``: 1, 2, ...). With ``--replan`` a human action the policy does not cover, but the
+human model allows, is applied and the robot replans from there (``{"replanned": {...}}``): a
+move the model allows, or a ``pass`` the fairness rule lets a policy leave out
+(docs/semantics.md §4); only an impossible move is an error. A failed robot action is always
+replanned from: from the same state when it did not happen, else after the robot's action
+whose outcome the observed facts describe. See ``docs/execution.md``.
 
 Exit codes (:func:`run` returns them): 0 the goal is reached; 1 the input ended before the goal,
 or replanning found no policy; 2 a policy that turns out not to fit the problem (a
@@ -19,18 +23,28 @@ or replanning found no policy; 2 a policy that turns out not to fit the problem 
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import re
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
-from ..errors import ExecutionError, PolicyMismatch, UncoveredHumanAction
+from ..epistemic.semantics import Move
+from ..errors import ExecutionError, InputError, PolicyMismatch, UncoveredHumanAction
 from ..formats.policy import label_key, num
+from ..model.vocabulary import MoveKind
 from .executor import Action, Executor, Step
+
+if TYPE_CHECKING:
+    from ..search.planner import Result
 
 EXIT_GOAL, EXIT_STOPPED, EXIT_BAD = 0, 1, 2
 
 Emit = Callable[[dict[str, Any]], None]
+REQUESTS = ("human", "robot_done", "robot_failed")
+SHOWN = 60  # characters of a bad label an error line repeats in its message
+NOTHING = object()  # a failed robot action's outcome: it did not happen
 
 
 def beliefs(ex: Executor) -> dict[str, Any]:
@@ -63,9 +77,16 @@ class Session:
 
     def __init__(self, ex: Executor, emit: Emit, *, replan: bool,
                  save: Path | None = None) -> None:
-        self.ex, self.emit, self.replan, self.save = ex, emit, replan, save
+        self.ex, self.out, self.replan, self.save = ex, emit, replan, save
         self.exit: int | None = None  # set when the session is over
         self.replans = 0
+        self.seq = 0  # output lines so far
+
+    def emit(self, message: dict[str, Any]) -> None:
+        """Write ``message`` as the next output line, numbered last (``"seq"``: 1, 2, ...), so
+        that a reader that names a line by its first key still can."""
+        self.seq += 1
+        self.out({**message, "seq": self.seq})
 
     def start(self, source: str) -> None:
         ex = self.ex
@@ -115,10 +136,11 @@ class Session:
         except (json.JSONDecodeError, RecursionError) as e:
             self.error("bad-json", f"not a JSON object: {getattr(e, 'msg', e)}", line)
             return
-        if not isinstance(msg, dict) or len(msg) != 1 or next(iter(msg)) not in (
-                "human", "robot_done"):
+        if not isinstance(msg, dict) or len(msg) != 1 or next(iter(msg)) not in REQUESTS:
             self.error("bad-request", 'expected one of {"human": "ACTION"}, '
-                       '{"robot_done": "ACTION"} or {"robot_done": true}', line)
+                       '{"robot_done": "ACTION"} or {"robot_done": true}, '
+                       '{"robot_failed": "ACTION"} or {"robot_failed": {"action": "ACTION", '
+                       '"observed": ["FACT", "not FACT"]}}', line)
             return
         key, value = next(iter(msg.items()))
         try:
@@ -127,16 +149,35 @@ class Session:
                     self.error("bad-request", "robot_done takes the action's label or true",
                                line)
                     return
+                if self.malformed(value, line):
+                    return
                 self.robot_done(None if value is True else value, line)
+            elif key == "robot_failed":
+                self.robot_failed(value, line)
             else:
                 if not isinstance(value, str):
                     self.error("bad-request", "human takes the action's label, e.g. "
                                '{"human": "pick(w)"}', line)
                     return
+                if self.malformed(value, line):
+                    return
                 self.human(value, line)
         except PolicyMismatch as e:
             self.error("policy-mismatch", str(e), line)
             self.exit = EXIT_BAD
+
+    def malformed(self, label: object, line: int) -> bool:
+        """Answer ``bad-request`` and return True when ``label`` is a string that is no move
+        label at all (``pick(w``), as opposed to a label that names no move here."""
+        if not isinstance(label, str):
+            return False
+        why = label_syntax(label)
+        if why is None:
+            return False
+        shown = label if len(label) <= SHOWN else label[:SHOWN] + "..."
+        self.error("bad-request", f"{shown!r} is not a move label: {why}; write it as the "
+                   "policy prints it, e.g. place(w, box2)", line, action=label)
+        return True
 
     def robot_done(self, label: str | None, line: int) -> None:
         ex = self.ex
@@ -190,23 +231,164 @@ class Session:
             self.error("no-policy", str(e), line, action=label)
             self.exit = EXIT_STOPPED
             return
+        self.replanned(result, {"action": label, "agent": ex.human_name, "failed": False})
+        self.stepped(ex.history[-1])
+
+    def replanned(self, result: Result, about: dict[str, Any]) -> None:
+        """The ``replanned`` line of a new policy (written to the --save-replans folder)."""
         assert result.policy is not None
         self.replans += 1
         stats = result.stats
         info: dict[str, Any] = {
-            "action": label, "after": len(ex.history), "status": result.status,
+            **about, "after": len(self.ex.history), "status": result.status,
             "cost": num(result.policy.cost), "nodes": len(result.policy.nodes),
             "distinct": stats.get("distinct"), "generated": stats.get("generated"),
             "time_ms": stats.get("time_ms")}
         if self.save is not None:
             path = self.save / f"replan-{self.replans}.json"
             try:
+                self.save.mkdir(parents=True, exist_ok=True)
                 result.policy.write(path)
                 info["policy"] = str(path)
             except OSError as e:
                 info["policy_error"] = f"{path}: cannot write ({e.strerror or e})"
         self.emit({"replanned": info})
-        self.stepped(ex.history[-1])
+
+    # -- the robot's action failed -------------------------------------------------------------
+    def robot_failed(self, value: Any, line: int) -> None:
+        """``{"robot_failed": LABEL | true}``: the robot's action did not happen, plan again
+        from the same state; ``{"robot_failed": {"action": LABEL | true, "observed":
+        [LITERAL, ...]}}``: it had another outcome, the state the literals describe among the
+        robot's actions here, and plan again after that action."""
+        label: Any = value
+        observed: list[str] | None = None
+        if isinstance(value, dict):
+            label = value.get("action", True)
+            observed = value.get("observed")
+            if set(value) - {"action", "observed"} or not isinstance(observed, list) or not \
+                    observed or not all(isinstance(x, str) for x in observed):
+                self.error("bad-request", 'robot_failed with facts is {"action": "ACTION", '
+                           '"observed": ["FACT", "not FACT", ...]}: at least one observed '
+                           "fact, as strings", line)
+                return
+        if label is not True and not isinstance(label, str):
+            self.error("bad-request", "robot_failed takes the action's label or true, or "
+                       '{"action": ..., "observed": [...]}', line)
+            return
+        if self.malformed(label, line):
+            return
+        ex = self.ex
+        intended = ex.next_robot_action()
+        if intended is None:
+            self.error("wrong-turn", f"it is not {ex.robot_name}'s turn: "
+                       + ("the task is done" if ex.done else f"{ex.human_name} is to move"),
+                       line)
+            return
+        if isinstance(label, str) and label_key(ex.strip_agent(label)) != label_key(
+                intended.label):
+            self.error("wrong-action", f"{ex.robot_name} reports {label!r} but the policy says "
+                       f"{intended.label}", line)
+            return
+        if observed is None:
+            self.replan_in_place(intended, line)
+            return
+        found = self.outcome(intended, observed, line)
+        if found is NOTHING:
+            self.replan_in_place(intended, line)
+        elif isinstance(found, Move):
+            self.replan_outcome(intended, found, observed, line)
+
+    def outcome(self, intended: Action, observed: list[str], line: int
+                ) -> Move | object | None:
+        """What happened, by the facts ``observed``: the robot's action here (a move of its
+        own, the policy's or another) whose result fits them, or :data:`NOTHING` when only the
+        state before fits; an error line and None when the facts are not atoms, or fit no
+        outcome or several."""
+        ex = self.ex
+        known = {label_key(a) for a in ex.grounded.atoms}
+        wanted: list[tuple[str, bool]] = []
+        for fact in observed:
+            negative = fact.strip().startswith("not ")
+            atom = label_key(fact.strip()[4:] if negative else fact)
+            if atom not in known and not any(label_key(a) == atom for a in ex.truth()):
+                self.error("bad-request", f"{fact[:SHOWN]!r} is not a fact that can change in "
+                           f"this problem; observed facts are atoms as the beliefs lines "
+                           "write them, or 'not ATOM'", line)
+                return None
+            wanted.append((atom, not negative))
+
+        def fits(true: int) -> bool:
+            holds = {label_key(a) for a in ex.grounded.state_atoms(true)}
+            return all((atom in holds) == positive for atom, positive in wanted)
+
+        nothing = fits(ex.state.true)
+        moves = [m for m in ex.sem.moves(ex.state) if m.kind == MoveKind.ACTION
+                 and m.child is not None and fits(m.child.true)]
+        labels = sorted({m.label for m in moves})
+        if nothing and not labels:
+            return NOTHING
+        if len(labels) == 1 and not nothing:
+            node = ex.node
+            if label_key(labels[0]) == label_key(intended.label) and node is not None \
+                    and len(node.moves) == 1:  # the policy's own edge
+                return ex.edge_move(node, node.moves[0])
+            return moves[0]
+        outcomes: list[str | None] = [*([None] if nothing else []), *labels]
+        if outcomes:
+            listed = ", ".join(o or "nothing happened" for o in outcomes)
+            why = (f"the observed facts fit more than one outcome of {ex.robot_name}'s actions "
+                   f"here ({listed}); observe more facts")
+        else:
+            why = (f"the observed facts fit no outcome of {ex.robot_name}'s actions here; "
+                   "replanning needs a state the problem's model can reach")
+        self.error("unexplained", why, line, action=intended.label, observed=observed,
+                   outcomes=outcomes)
+        return None
+
+    def replan_in_place(self, intended: Action, line: int) -> None:
+        """The robot's action did not happen: plan again from the same state."""
+        ex = self.ex
+        try:
+            result = ex.replan()
+        except PolicyMismatch:
+            raise
+        except ExecutionError as e:
+            self.error("no-policy", str(e), line, action=intended.label)
+            self.exit = EXIT_STOPPED
+            return
+        self.replanned(result, {"action": intended.label, "agent": ex.robot_name,
+                                "failed": True, "outcome": None})
+        self.prompt()
+
+    def replan_outcome(self, intended: Action, move: Move, observed: list[str],
+                       line: int) -> None:
+        """The robot's action had the outcome of ``move``: play it after the execution so
+        far, as the fixed opening of a new problem, plan after it and follow the new policy
+        (the executor replays the whole execution: the same state, K and beliefs)."""
+        from ..search.planner import solve  # as the executor does: loaded when planning
+
+        ex = self.ex
+        played = (*(s.played for s in ex.history),
+                  f"{ex.robot_name} {ex.sem.trace_label(ex.state, move)}")
+        problem = dataclasses.replace(ex.as_problem(), after=played)
+        try:
+            result = solve(problem)
+        except InputError as e:  # the planner cannot replay the execution as an opening
+            result = None
+            why = f"the planner does not replay the execution ({e.problem})"
+        if result is None or result.policy is None:
+            reason = why if result is None else result.reason or result.status
+            self.error("no-policy", f"no policy from here: {reason}", line,
+                       action=intended.label)
+            self.exit = EXIT_STOPPED
+            return
+        new = Executor(problem, result.policy)
+        new.replay_opening()
+        self.ex = new
+        self.replanned(result, {"action": intended.label, "agent": new.robot_name,
+                                "failed": True, "outcome": new.history[-1].action.label,
+                                "observed": observed})
+        self.stepped(new.history[-1])
 
 
 def run(ex: Executor, stdin: TextIO, emit: Emit, *, replan: bool = False,
@@ -217,18 +399,126 @@ def run(ex: Executor, stdin: TextIO, emit: Emit, *, replan: bool = False,
     try:
         session.start(source)
     except PolicyMismatch as e:
-        emit({"error": "policy-mismatch", "message": str(e), "line": 0})
+        session.emit({"error": "policy-mismatch", "message": str(e), "line": 0})
         return EXIT_BAD
     number = 0
     while session.exit is None:
         text = stdin.readline()
         if not text:
-            emit({"error": "end-of-input", "message": "the input ended before the goal",
-                  "line": number})
+            session.emit({"error": "end-of-input", "message": "the input ended before the "
+                          "goal", "line": number})
             return EXIT_STOPPED
         number += 1
         session.handle(text, number)
     return session.exit
+
+
+def replans_folder(path: Path) -> Path:
+    """Return ``path``, created with its parents if missing: where ``--save-replans`` writes;
+    :class:`InputError` when it cannot be a folder."""
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise InputError(str(path), "", f"cannot create the folder ({e.strerror or e})",
+                         "give --save-replans a folder ehatp may create and write") from None
+    return path
+
+
+# --- move labels -------------------------------------------------------------------------------
+
+_TOKEN = re.compile(r"\s*(?:([\w\-]+)|(.))", re.UNICODE)
+
+
+def label_syntax(label: str) -> str | None:
+    """Return why ``label`` is not a move label (``pick(w``: a ``(`` is not closed), None
+    when it is one. A label is an optional agent name, then calls joined by ``+`` (what is
+    said with an action): ``NAME`` or ``NAME(ARG, ...)``, an argument being a name, a call,
+    ``not`` and a call, or a value ``CALL = NAME``; then, optionally, the agenda it leaves in
+    brackets (``fetch [shelve]``). Whether it names a move here is the executor's question."""
+    tokens: list[str] = []
+    for m in _TOKEN.finditer(label):
+        if m.group(1) is not None:
+            tokens.append("NAME:" + m.group(1))
+        elif m.group(2) is not None and not m.group(2).isspace():  # trailing blanks
+            tokens.append(m.group(2))
+    if not tokens:
+        return "it is empty"
+    return _Labels(tokens).label()
+
+
+class _Labels:
+    """A recursive-descent reader of :func:`label_syntax`'s grammar over its tokens."""
+
+    def __init__(self, tokens: list[str]) -> None:
+        self.tokens, self.i = tokens, 0
+
+    def peek(self, k: int = 0) -> str:
+        j = self.i + k
+        return self.tokens[j] if j < len(self.tokens) else "END"
+
+    def name(self) -> bool:
+        if self.peek().startswith("NAME:"):
+            self.i += 1
+            return True
+        return False
+
+    def expect(self, token: str) -> str | None:
+        if self.peek() == token:
+            self.i += 1
+            return None
+        return self.unexpected(f"{token} expected")
+
+    def unexpected(self, what: str) -> str:
+        got = self.peek()
+        if got == "END":
+            return f"it ends early ({what})"
+        return f"{what}, found {got.removeprefix('NAME:')!r}"
+
+    def label(self) -> str | None:
+        if self.peek().startswith("NAME:") and self.peek(1).startswith("NAME:"):
+            self.i += 1  # the agent's name
+        why = self.call()
+        while why is None and self.peek() == "+":
+            self.i += 1
+            why = self.call()
+        if why is None and self.peek() == "[":
+            self.i += 1
+            if self.peek() != "]":
+                why = self.args()
+            why = why or self.expect("]")
+        if why is None and self.peek() != "END":
+            why = self.unexpected("nothing more expected")
+        return why
+
+    def call(self) -> str | None:
+        if not self.name():
+            return self.unexpected("a name expected")
+        if self.peek() != "(":
+            return None
+        self.i += 1
+        if self.peek() == "END":
+            return "a ( is not closed"
+        why = self.args()
+        if why is None and self.peek() == "END":
+            return "a ( is not closed"
+        return why or self.expect(")")
+
+    def args(self) -> str | None:
+        why = self.arg()
+        while why is None and self.peek() == ",":
+            self.i += 1
+            why = self.arg()
+        return why
+
+    def arg(self) -> str | None:
+        if self.peek() == "NAME:not" and self.peek(1).startswith("NAME:"):
+            self.i += 1
+        why = self.call()
+        if why is None and self.peek() == "=":
+            self.i += 1
+            if not self.name():
+                return self.unexpected("a value expected after =")
+        return why
 
 
 def json_lines(out: TextIO) -> Emit:
@@ -239,4 +529,5 @@ def json_lines(out: TextIO) -> Emit:
     return emit
 
 
-__all__ = ["EXIT_BAD", "EXIT_GOAL", "EXIT_STOPPED", "Session", "beliefs", "json_lines", "run"]
+__all__ = ["EXIT_BAD", "EXIT_GOAL", "EXIT_STOPPED", "Session", "beliefs", "json_lines",
+           "label_syntax", "replans_folder", "run"]
