@@ -18,9 +18,9 @@ import typer
 
 from ..errors import ExecutionError, InputError, PolicyMismatch
 from ..formats.policy_check import read_policy
-from ..run.execute import EXIT_STOPPED, Emit, run
+from ..run.execute import EXIT_STOPPED, Emit, replans_folder, run
 from ..run.executor import Executor
-from .common import command_app, die, load_problem, user_errors
+from .common import command_app, load_problem, user_errors
 
 app = command_app()
 
@@ -73,11 +73,12 @@ def execute_cmd(
             raise InputError(where, "", str(e), "give the policy solved for this problem"
                              ) from None
         except ExecutionError as e:
-            typer.echo(json.dumps({"error": "no-policy", "message": str(e), "line": 0}))
+            typer.echo(json.dumps({"error": "no-policy", "message": str(e), "line": 0,
+                                   "seq": 1}))
             raise typer.Exit(EXIT_STOPPED) from None
-    if save_replans is not None and not save_replans.is_dir():
-        die(InputError(str(save_replans), "", "not a folder",
-                       "create it, or give an existing folder to --save-replans").line())
+    if save_replans is not None:
+        with user_errors(save_replans):
+            replans_folder(save_replans)  # created, with its parents, if missing
     code = run(ex, sys.stdin, safe_json_lines(sys.stdout), replan=replan,
                source=str(policy) if policy is not None else "solved now",
                save=save_replans)
