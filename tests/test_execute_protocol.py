@@ -234,3 +234,33 @@ def test_every_output_line_ends_with_its_number_errors_included() -> None:
         ("start", 1), ("beliefs", 2), ("waiting", 3), ("error", 4),   # bad-json
         ("step", 5), ("beliefs", 6), ("robot", 7), ("error", 8)]      # end-of-input
     assert [list(m)[-1] for m in msgs] == ["seq"] * 8
+
+
+def test_save_replans_creates_the_folder_with_its_parents(tmp_path: Path) -> None:
+    folder = tmp_path / "runs" / "today"
+    ask = tmp_path / "ask.json"
+    solved(QUAL_ASK).policy.write(ask)
+    r = ehatp_cli("execute", QUAL, "--policy", ask, "--replan", "--save-replans", folder,
+                  stdin=lines({"robot_done": True}, {"human": "pass"}))
+    assert r.returncode == 1, r.stderr  # the input ends before the goal
+    (replanned,) = [m["replanned"] for m in numbered(r.stdout) if "replanned" in m]
+    assert replanned["policy"] == str(folder / "replan-1.json")
+    assert (folder / "replan-1.json").is_file()
+
+
+def test_save_replans_under_a_file_is_one_error_line(tmp_path: Path) -> None:
+    (tmp_path / "f").write_text("", encoding="utf-8")
+    r = ehatp_cli("execute", QUAL, "--save-replans", tmp_path / "f" / "x", stdin="")
+    assert r.returncode == 2 and r.stdout == ""
+    assert r.stderr == (f"error: {tmp_path / 'f' / 'x'}: cannot create the folder (Not a "
+                        "directory); give --save-replans a folder ehatp may create and "
+                        "write\n")
+
+
+def test_the_no_policy_line_before_the_protocol_is_numbered_too(tmp_path: Path) -> None:
+    tiny = tmp_path / "tiny.toml"
+    tiny.write_text(QUAL.read_text(encoding="utf-8") + "\n[limits]\nmax_states = 2\n",
+                    encoding="utf-8")
+    r = ehatp_cli("execute", tiny, stdin="")
+    assert r.returncode == 1
+    assert kinds(numbered(r.stdout)) == ["error"]
