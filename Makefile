@@ -37,6 +37,12 @@ lint: $(VENV)/.installed
 bench: $(VENV)/.installed
 	$(BIN)/ehatp bench table1
 
+## The BehaviorTree.CPP tick program tests/test_bt_cpp.py runs, built into ~/.cache/ehatp-btcpp
+## against an installed BehaviorTree.CPP 4 (benchmarks/bt_cpp.py says where it looks); not in CI.
+.PHONY: bt-cpp
+bt-cpp:
+	python3 benchmarks/bt_cpp.py
+
 ## Debian packages some tests use (Graphviz for SVG, Chromium for the explorer test); needs root.
 system-deps:
 	apt-get update -qq && apt-get install -y -qq graphviz chromium chromium-driver
