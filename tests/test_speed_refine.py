@@ -89,11 +89,13 @@ def test_a_task_that_gives_nothing_is_found_and_left_out() -> None:
     assert r._dead(H1, set()) == (2, True)
     assert r._dead(T, set()) == (None, True)  # a done-condition: may give
     assert r._dead(U, set()) == (None, True)
-    kept, reach, final = r._kept.get(U) or (None, None, None)
-    assert kept is None  # not asked yet
+    assert U not in r._kept  # not asked yet
     r.refine((U,), S0)
-    kept, reach, final = r._kept[U]
-    assert [b for _, _, b in kept] == [(Y,), (U, X)] and reach == 1 and final == -1
+    kept, every, reach, final = r._kept[U]
+    assert [w[2] for w in kept] == [(Y,), (U, X)] and reach == 1 and final == -1
+    assert [w[2] for w in every] == [(Y,), (U, X), (D,)]
+    # a body that starts with an action carries its precondition (y's: always); U does not
+    assert [(w[3] is not None, w[4], w[5]) for w in kept] == [(True, Y, ()), (False, U, (X,))]
 
 
 def test_left_out_methods_keep_the_nesting_limit() -> None:
@@ -129,11 +131,11 @@ def test_a_task_still_to_ground_is_not_judged() -> None:
     g.pending = {Z}
     r = Refiner(g, NAMES)
     assert r.refine((D, Y), SA) == ()
-    assert r._kept[D][2] == 0  # not final: asked again after the next grounding
+    assert r._kept[D][3] == 0  # not final: asked again after the next grounding
     g.pending = set()
     g.asked = 1
     assert r.refine((D, X), SC) == ()  # another state: D is refined again
-    assert r._kept[D][2] == -1
+    assert r._kept[D][3] == -1
 
 
 def test_spliced_refinement_equals_the_walk_on_many_agendas() -> None:

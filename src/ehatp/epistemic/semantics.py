@@ -94,6 +94,9 @@ class Semantics:
         self._vis: dict[int, int] = {}
         self._cop: dict[int, bool] = {}
         self._succ: dict[World, tuple[World, ...]] = {}
+        self._knows: dict[int, bool] = {}  # task -> whether M_R^H knows it (attributed)
+        self._rops: dict[int, GOp] = {}  # robot actions met, as M_R and M_R^H have them
+        self._seen_ops: dict[int, GOp] = {}
         self._inform: dict[tuple[int, Agenda, tuple[Agenda, ...], Worlds], tuple[int, ...]] = {}
         self.check: Callable[[], None] = no_check
 
@@ -258,11 +261,18 @@ class Semantics:
 
     def robot_op(self, op: int) -> GOp:
         """§4: the robot action as it really is (M_R)."""
-        return self.grounded.robot.ops[op]
+        r = self._rops.get(op)
+        if r is None:  # an action refinement offered is grounded already: kept as it is
+            r = self._rops[op] = self.grounded.robot.ops[op]
+        return r
 
     def anticipated_op(self, op: int) -> GOp:
         """The robot action as the human understands it (M_R^H), else as it really is."""
-        return self.grounded.robot_seen_by_human.ops.get(op) or self.grounded.robot.ops[op]
+        r = self._seen_ops.get(op)
+        if r is None:
+            r = self._seen_ops[op] = (self.grounded.robot_seen_by_human.ops.get(op)
+                                      or self.grounded.robot.ops[op])
+        return r
 
     def attributed(self, agenda: Agenda) -> Agenda:
         """§4: the robot agenda as the human holds it after revising its beliefs: the tasks of
@@ -271,9 +281,27 @@ class Semantics:
         model = self.grounded.robot_seen_by_human
         if model is self.grounded.robot:
             return agenda
-        return self.net.keep(agenda,
-                             lambda t: (t in model.ops or bool(model.methods.get(t))
-                                        or t in model.done))
+        known = self._knows
+        out: list[int] = []
+        for t in agenda:
+            if not isinstance(t, int):  # a block: what is left of it in canonical form
+                return self.net.keep(agenda, self._knows_task)
+            k = known.get(t)
+            if k is None:
+                k = self._knows_task(t)
+            if k:
+                out.append(t)
+        return agenda if len(out) == len(agenda) else tuple(out)
+
+    def _knows_task(self, t: int) -> bool:
+        """§4: whether M_R^H has an operator, a method or a done-condition for task ``t``
+        (memoised: that model is grounded whole)."""
+        k = self._knows.get(t)
+        if k is None:
+            model = self.grounded.robot_seen_by_human
+            k = self._knows[t] = (t in model.ops or bool(model.methods.get(t))
+                                  or t in model.done)
+        return k
 
     def successors(self, w: World) -> tuple[World, ...]:
         """The world itself (noop) and every event the human anticipates of the robot there."""

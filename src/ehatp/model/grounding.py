@@ -82,6 +82,7 @@ class _Grounder:
         self.task_index: dict[str, int] = {}
         self._derived: dict[tuple[str, tuple[str, ...]], Formula] = {}
         self._offer: dict[_Gen, dict[tuple[str, ...], frozenset[str]]] = {}
+        self._subtasks_ok: set[tuple[int, str, tuple[str, ...]]] = set()  # (model, call)
 
     def run(self) -> Grounded:
         """Return the ground problem, built in named steps (GTPyhop-style pseudo-code)::
@@ -416,6 +417,9 @@ class _Grounder:
         return g
 
     def _check_subtask(self, model: AgentModel, st: TaskRef, args: tuple[str, ...]) -> None:
+        key = (id(model), st.name, args)
+        if key in self._subtasks_ok:  # each call checked once
+            return
         decl = model.operators.get(st.name) or model.tasks.get(st.name)
         if decl is None:
             raise DomainError(f"{model.agent}: subtask {st.name!r} is neither a task nor an action")
@@ -426,6 +430,7 @@ class _Grounder:
                 raise DomainError(f"{model.agent}: subtask {st}: {a!r} {kind}; "
                                   f"{signature(decl.name, decl.params)} wants "
                                   f"{article(v.type)} {v.type} for {v.name}")
+        self._subtasks_ok.add(key)
 
     def effects(self, effs: Sequence[Effect], b: Mapping[Var, str],
                 cond: Formula) -> tuple[int, int, list[tuple[StateFn, int, int]]]:
@@ -630,7 +635,8 @@ class _ModelGrounding:
                 domain = [o for o in domain if o in offered]
             for o in domain:
                 b[v] = o
-                if all(gr.ground_f(c, b) != FALSE for c in checks[i + 1]):
+                cs = checks[i + 1]
+                if not cs or all(gr.ground_f(c, b) != FALSE for c in cs):
                     vals.append(o)
                     yield from go(i + 1)
                     vals.pop()

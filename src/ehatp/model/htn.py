@@ -63,7 +63,11 @@ class Block(tuple[tuple[int, int], ...]):
 
 Item = int | Block
 Agenda = tuple[Item, ...]
-Bodies = tuple[tuple[StateFn, Formula, Agenda], ...]  # a task's methods: pre, its formula, body
+Way = tuple[StateFn, Formula, Agenda, StateFn | None, int, Agenda]
+"""A method as the walk reads it: precondition, its formula, body; when the body starts with
+an action without a done-condition, that action's precondition (else None), the first item's
+task id (-1: a block, or none) and the body after it."""
+Ways = tuple[Way, ...]
 Option = tuple[int, Agenda]  # (ground action id or FINISH, remaining agenda)
 Members = list[tuple[int, int]]  # (task id, predecessor mask over the list's positions)
 
@@ -419,7 +423,7 @@ class Refiner:
         # each task's methods without those that start with such a task, and how deep the
         # walk of those left out goes (_NONE: none left out); the model's count of tasks
         # grounded on demand when that was found (-1: final, nothing left to ground)
-        self._kept: dict[int, tuple[Bodies, int, int]] = {}
+        self._kept: dict[int, tuple[Ways, Ways, int, int]] = {}
         # called now and then while refining (a time or memory limit may raise from it)
         self.check: Callable[[], None] = no_check
         self._steps = 0
@@ -482,32 +486,41 @@ class Refiner:
         self._reach[u] = r
         return r, True
 
-    def _methods(self, t: int, depth: int) -> Bodies:
+    def _methods(self, t: int, depth: int) -> Ways:
         """§1: the methods of task ``t`` whose refinement at nesting ``depth`` may give
         something: those that start with a task that gives nothing in any state
         (:meth:`_dead`) are left out, unless the walk inside them could go past the nesting
-        limit from there (then the rule's walk is kept, and raises where it did)."""
+        limit from there (then the rule's walk is kept, and raises where it did). Each as a
+        :data:`Way`: a body that starts with an action without a done-condition carries
+        that action's precondition, so the walk need not step into the body to read it."""
         k = self._kept.get(t)
         model = self.model
-        if k is None or (k[2] >= 0 and k[2] != model.asked):
-            bodies = self._bodies.get(t) or self._body(t)
-            keep: list[tuple[StateFn, Formula, Agenda]] = []
+        if k is None or (k[3] >= 0 and k[3] != model.asked):
+            ways: list[Way] = []
+            keep: list[Way] = []
             reach, final = _NONE, True
-            for m in bodies:
-                body = m[2]
+            for pre, pre_f, body in self._bodies.get(t) or self._body(t):
+                first, op_pre = -1, None
                 if body and not isinstance(body[0], Block):
-                    e, fin = self._dead(body[0], set())
+                    first = body[0]
+                    e, fin = self._dead(first, set())
                     final = final and fin
                     if e is not None:
                         reach = max(reach, 1 + e)
+                        ways.append((pre, pre_f, body, None, first, body[1:]))
                         continue
-                keep.append(m)
-            k = (tuple(keep) if reach > _NONE else bodies, reach, -1 if final else model.asked)
+                    op = model.ops.get(first) if fin else None  # read only once grounded
+                    if op is not None and op.done is None:
+                        op_pre = op.pre
+                way = (pre, pre_f, body, op_pre, first, body[1:])
+                ways.append(way)
+                keep.append(way)
+            k = (tuple(keep), tuple(ways), reach, -1 if final else model.asked)
             self._kept[t] = k
-        if k[1] > _NONE:
-            deep = depth + k[1]
+        if k[2] > _NONE:
+            deep = depth + k[2]
             if deep > self.limit:
-                return self._bodies[t]
+                return k[1]
             if deep > self._deep:
                 self._deep = deep
         return k[0]
@@ -670,9 +683,12 @@ class Refiner:
         rest = agenda[1:]
         inner = (*open_, (t, n - 1))
         # a task this model does not know gives nothing: the agent is blocked on it
-        for pre, _, body in self._methods(t, depth):
+        for pre, _, body, op_pre, first, after in self._methods(t, depth):
             if pre(s):
-                self._go(body + rest, s, out, depth + 1, inner)
+                if op_pre is None:
+                    self._go(body + rest, s, out, depth + 1, inner)
+                elif op_pre(s):  # the body starts with an action: what _go would add
+                    out.add((first, after + rest))
 
     def _go_block(self, b: Block, rest: Agenda, s: int, out: set[Option], depth: int,
                   open_: Open = ()) -> None:
@@ -766,7 +782,7 @@ class Refiner:
         if depth > self.limit:
             raise self._endless(t, open_)
         inner = (*open_, (t, n - 1))
-        for pre, pre_f, body in self._methods(t, depth):
+        for pre, pre_f, body, _, _, _ in self._methods(t, depth):
             mw = _holds(pre, states, ws)
             if mw:
                 self._go_all(body + rest, states, mw, _add(conds, pre_f, mw != ws), out,

@@ -160,6 +160,8 @@ class Heuristic:
                                      *(price(op) for op in d.human.operators.values())])
         self._robot_agendas: dict[Agenda, tuple[Bound, Bound]] = {}
         self._human_agendas: dict[Agenda, tuple[Bound, Bound]] = {}
+        self._robot_tasks: dict[int, tuple[Bound, Bound]] = {}  # task -> its bound
+        self._human_tasks: dict[int, tuple[Bound, Bound]] = {}
 
     def __call__(self, es: EState) -> Bound:
         """§6-§7: a lower bound on the worst-case cost from ``es`` to a goal (0 at a goal,
@@ -196,19 +198,27 @@ class Heuristic:
         cache = self._robot_agendas if robot else self._human_agendas
         r = cache.get(agenda)
         if r is None:
-            costs, counts = self._robot if robot else self._human
-            names = self._g.task_names
+            tasks = self._robot_tasks if robot else self._human_tasks
             cost: Bound = 0
             count: Bound = 0
             for item in agenda:
                 for t in ((member for member, _ in item) if isinstance(item, Block) else (item,)):
                     if t < 0:  # FINISH
                         continue
-                    schema = names[t].partition("(")[0]
-                    cost = cost + costs.get(schema, 0)
-                    count = count + counts.get(schema, 0)
+                    tc = tasks.get(t)
+                    if tc is None:
+                        tc = tasks[t] = self._task(t, robot)
+                    cost = cost + tc[0]
+                    count = count + tc[1]
             r = cache[agenda] = (cost, count)
         return r
+
+    def _task(self, t: int, robot: bool) -> tuple[Bound, Bound]:
+        """§1: the least cost and number of actions that finishing task ``t`` takes (its
+        schema's, from the lifted model)."""
+        costs, counts = self._robot if robot else self._human
+        schema = self._g.task_names[t].partition("(")[0]
+        return costs.get(schema, 0), counts.get(schema, 0)
 
 
 __all__ = ["INF", "OVERRIDE", "Bound", "Heuristic", "enabled", "least_costs"]
