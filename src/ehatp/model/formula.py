@@ -288,37 +288,42 @@ def ground(
 ) -> Formula:
     """Substitute ``binding``, expand quantifiers over ``objects`` (by type) and let ``atom``
     turn each ground atom into TRUE, FALSE, a GAtom or a (ground) formula, and ``compare``
-    each ground counter comparison (counter, args, op, k); then simplify."""
+    each ground counter comparison (counter, args, op, k); then simplify. (A plain recursive
+    function: a nested one would be a reference cycle per call, left to the cycle collector.)"""
+    return _ground(f, binding, objects, atom, compare)
 
-    def term(t: Term, b: Mapping[Var, str]) -> str:
-        if isinstance(t, Var):
-            return b[t]
-        return t
 
-    def go(f: Formula, b: Mapping[Var, str]) -> Formula:
-        if isinstance(f, Atom):
-            return atom(f.pred, tuple(term(a, b) for a in f.args))
-        if isinstance(f, Eq):
-            return TRUE if term(f.left, b) == term(f.right, b) else FALSE
-        if isinstance(f, Not):
-            return negate(go(f.arg, b))
-        if isinstance(f, And):
-            return simplify_and([go(a, b) for a in f.args])
-        if isinstance(f, Or):
-            return simplify_or([go(a, b) for a in f.args])
-        if isinstance(f, Exists | Forall):
-            parts = [go(f.body, {**b, **dict(zip(f.vars, vals, strict=True))})
-                     for vals in product([objects[v.type] for v in f.vars])]
-            return simplify_or(parts) if isinstance(f, Exists) else simplify_and(parts)
-        if isinstance(f, Cmp):
-            if compare is None:
-                raise TypeError(f"no counters here: {f}")
-            return compare(f.counter, tuple(term(a, b) for a in f.args), f.op, f.k)
-        if isinstance(f, GAtom | GTest):
-            return f
-        raise TypeError(f"not a formula: {f!r}")
+def _term(t: Term, b: Mapping[Var, str]) -> str:
+    if isinstance(t, Var):
+        return b[t]
+    return t
 
-    return go(f, binding)
+
+def _ground(f: Formula, b: Mapping[Var, str], objects: Mapping[str, Sequence[str]],
+            atom: Callable[[str, tuple[str, ...]], Formula],
+            compare: Callable[[str, tuple[str, ...], str, int], Formula] | None) -> Formula:
+    if isinstance(f, Atom):
+        return atom(f.pred, tuple(_term(a, b) for a in f.args))
+    if isinstance(f, Eq):
+        return TRUE if _term(f.left, b) == _term(f.right, b) else FALSE
+    if isinstance(f, Not):
+        return negate(_ground(f.arg, b, objects, atom, compare))
+    if isinstance(f, And):
+        return simplify_and([_ground(a, b, objects, atom, compare) for a in f.args])
+    if isinstance(f, Or):
+        return simplify_or([_ground(a, b, objects, atom, compare) for a in f.args])
+    if isinstance(f, Exists | Forall):
+        parts = [_ground(f.body, {**b, **dict(zip(f.vars, vals, strict=True))}, objects, atom,
+                         compare)
+                 for vals in product([objects[v.type] for v in f.vars])]
+        return simplify_or(parts) if isinstance(f, Exists) else simplify_and(parts)
+    if isinstance(f, Cmp):
+        if compare is None:
+            raise TypeError(f"no counters here: {f}")
+        return compare(f.counter, tuple(_term(a, b) for a in f.args), f.op, f.k)
+    if isinstance(f, GAtom | GTest):
+        return f
+    raise TypeError(f"not a formula: {f!r}")
 
 
 def product(domains: Sequence[Sequence[str]]) -> Iterable[tuple[str, ...]]:
