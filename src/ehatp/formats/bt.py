@@ -6,15 +6,19 @@ The policy is a graph (docs/policy-format.md); the tree follows it from the root
   ``Say`` for an inform, a question to the human about its intention (``ask``) or an
   announcement of the robot's own (``announce``), ``Silence`` for the robot's silent move at a
   speech opening; an action (or wait) said with an inform is a ``Say`` then the
-  ``RobotAction`` (or ``RobotWait``);
+  ``RobotAction`` (or ``RobotWait``); the node that finishes a robot move says so in its
+  ``completes`` port;
 - a human choice becomes ``WaitHumanAction``, a stateful node that runs until the human acts
   and writes what it observed to a blackboard entry, then a ``Fallback`` with one branch per
   move the policy covers -- a ``HumanDid`` condition on that entry, a ``Say`` with the robot's
   answer when the move is a question, then the rest of the policy -- and a last branch for
-  anything else: ``ReportUncovered`` then ``AlwaysFailure``;
+  anything else: ``ReportUncovered`` then ``AlwaysFailure``; when the policy covers one move,
+  the rest of the policy follows the ``Fallback`` instead of nesting in it;
 - a goal is ``GoalReached``;
 - a node with more than one move into it (a state shared by several paths) becomes a tree of
-  its own, defined once and used through ``<SubTree ID="Node_N"/>``.
+  its own, defined once and used through ``<SubTree ID="Node_N"/>``; so does a branch below
+  ``MAX_NESTED_CHOICES`` nested choices, so that no tree is nested deeper than
+  BehaviorTree.CPP's parser allows, however long the policy.
 
 One structure (:class:`Forest` of :class:`BTNode`) is built from the policy and then written as
 BehaviorTree.CPP v4 XML (with a ``TreeNodesModel`` for Groot) or as a py_trees module; the
@@ -48,9 +52,8 @@ class BTFormat(StrEnum):
 # schema (writeTreeXSD) does not require it.
 Port = tuple[str, str, str, str | None]
 _COMPLETES: Port = (
-    "input", "completes", "the label of the policy's robot move this node finishes (the point "
-    "where an ehatp Executor is told robot_action_done); empty: it finishes none (a Say said "
-    "before the action it goes with, or an answer to the human's question)", "")
+    "input", "completes", "the robot's policy move this node finishes, as the policy prints "
+    "it; empty: none (a Say before the action it is said with, or an answer)", "")
 CUSTOM_NODES: tuple[tuple[str, str, str, tuple[Port, ...]], ...] = (
     ("Action", "RobotAction", "The robot does one action of its domain.", (
         ("input", "action", "the action as the policy prints it, e.g. place(r, box1)", None),

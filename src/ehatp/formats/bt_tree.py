@@ -16,9 +16,9 @@ SEP = ";"  # list separator in a port value (BehaviorTree.CPP splits vectors on 
 @dataclass
 class BTNode:
     """One node of the tree: its BehaviorTree.CPP tag (node ID) and ports, in writing order.
-    Not written to XML: ``completes``, the label of the robot's policy move that this node
-    finishes (the last node of each robot move), and ``node``, the policy node of a human
-    choice's ``Fallback``."""
+    ``completes`` is the label of the robot's policy move that this node finishes (the last
+    node of each robot move; the XML's ``completes`` port, written after the others); ``node``
+    is the policy node of a human choice's ``Fallback`` (not written to XML)."""
 
     tag: str
     attrs: dict[str, str] = field(default_factory=dict)
