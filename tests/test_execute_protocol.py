@@ -15,6 +15,7 @@ from typing import Any
 
 import pytest
 
+import ehatp
 from ehatp.run.execute import label_syntax
 from ehatp.run.executor import Executor
 
@@ -130,6 +131,34 @@ def test_observed_facts_name_the_outcome_or_are_one_error_line() -> None:
     replanned, again = answer(msgs, 7)
     assert replanned["replanned"]["outcome"] is None and replanned["replanned"]["after"] == 3
     assert again == robot("place(r, box1)", "place", "r", "box1")
+
+
+@pytest.mark.parametrize(("value", "outcome"), [
+    ("balls(b1) = 1", "drop(b1)"),  # the drop happened after all
+    ("balls(b1) = 0", None),        # it did not
+])
+def test_observed_facts_may_give_a_counters_value(value: str, outcome: str | None) -> None:
+    from .test_counters import balls_problem
+
+    # the robot fills box b1 with balls while the human is out: after "leave", it is told to
+    # drop one; a counter is written by its value, as the beliefs lines write it
+    problem = balls_problem()
+    result = ehatp.solve(problem)
+    assert result.policy is not None
+    code, msgs = session(Executor(problem, result.policy), lines(
+        {"human": "leave"},
+        {"robot_failed": {"action": "drop(b1)", "observed": [value]}},
+        {"robot_failed": {"action": "drop(b1)", "observed": ["balls(b1) = 3"]}}))
+    assert answer(msgs, 1)[-1] == robot("drop(b1)", "drop", "b1")
+    replanned = answer(msgs, 2)[0]["replanned"]
+    assert (replanned["outcome"], replanned["observed"]) == (outcome, [value])
+    if outcome is None:
+        assert answer(msgs, 2)[1:] == [robot("drop(b1)", "drop", "b1")]
+        (error,) = answer(msgs, 3)  # three balls: no outcome of one drop
+        assert (error["error"], error["outcomes"]) == ("unexplained", [])
+    else:
+        assert answer(msgs, 2)[1] == step(2, "R", "drop(b1)", 0)
+        assert answer(msgs, 2)[-1] == {"waiting": {"human": "H", "expected": ["scoop"]}}
 
 
 @pytest.mark.parametrize(("sent", "error", "message"), [

@@ -294,7 +294,7 @@ class Session:
             return
         found = self.outcome(intended, observed, line)
         if found is NOTHING:
-            self.replan_in_place(intended, line)
+            self.replan_in_place(intended, line, observed)
         elif isinstance(found, Move):
             self.replan_outcome(intended, found, observed, line)
 
@@ -305,12 +305,19 @@ class Session:
         state before fits; an error line and None when the facts are not atoms, or fit no
         outcome or several."""
         ex = self.ex
-        known = {label_key(a) for a in ex.grounded.atoms}
+        actions = [m for m in ex.sem.moves(ex.state) if m.kind == MoveKind.ACTION
+                   and m.child is not None]
+        facts = {t: {label_key(a) for a in ex.grounded.state_atoms(t)}
+                 for t in {ex.state.true, *(m.child.true for m in actions if m.child)}}
+        g = ex.grounded
+        known = {label_key(a) for a in g.atoms}.union(  # and every value of every counter
+            *facts.values(), (label_key(f"{g.unit_names[u]} = {v}") for u, top in
+                              g.counter_max.items() for v in range(top + 1)))
         wanted: list[tuple[str, bool]] = []
         for fact in observed:
             negative = fact.strip().startswith("not ")
             atom = label_key(fact.strip()[4:] if negative else fact)
-            if atom not in known and not any(label_key(a) == atom for a in ex.truth()):
+            if atom not in known:
                 self.error("bad-request", f"{fact[:SHOWN]!r} is not a fact that can change in "
                            f"this problem; observed facts are atoms as the beliefs lines "
                            "write them, or 'not ATOM'", line)
@@ -318,12 +325,10 @@ class Session:
             wanted.append((atom, not negative))
 
         def fits(true: int) -> bool:
-            holds = {label_key(a) for a in ex.grounded.state_atoms(true)}
-            return all((atom in holds) == positive for atom, positive in wanted)
+            return all((atom in facts[true]) == positive for atom, positive in wanted)
 
         nothing = fits(ex.state.true)
-        moves = [m for m in ex.sem.moves(ex.state) if m.kind == MoveKind.ACTION
-                 and m.child is not None and fits(m.child.true)]
+        moves = [m for m in actions if m.child is not None and fits(m.child.true)]
         labels = sorted({m.label for m in moves})
         if nothing and not labels:
             return NOTHING
@@ -345,7 +350,8 @@ class Session:
                    outcomes=outcomes)
         return None
 
-    def replan_in_place(self, intended: Action, line: int) -> None:
+    def replan_in_place(self, intended: Action, line: int,
+                        observed: list[str] | None = None) -> None:
         """The robot's action did not happen: plan again from the same state."""
         ex = self.ex
         try:
@@ -357,7 +363,8 @@ class Session:
             self.exit = EXIT_STOPPED
             return
         self.replanned(result, {"action": intended.label, "agent": ex.robot_name,
-                                "failed": True, "outcome": None})
+                                "failed": True, "outcome": None,
+                                **({} if observed is None else {"observed": observed})})
         self.prompt()
 
     def replan_outcome(self, intended: Action, move: Move, observed: list[str],
