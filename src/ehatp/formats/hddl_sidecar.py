@@ -6,12 +6,15 @@ TOML or from a Python module, and the literals it writes (``"at(?x, depot)"``, `
 from __future__ import annotations
 
 import importlib.util
+import json
 import re
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from functools import cache
+from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from ..errors import HddlUnsupported, control_char
 
@@ -100,9 +103,55 @@ def read_sidecar(path: str | Path | None) -> Sidecar:
         data = tomllib.loads(p.read_text(encoding="utf-8"))
     except OSError as e:
         raise HddlUnsupported(f"{p}: cannot read the sidecar ({e.strerror or e})") from None
+    except UnicodeDecodeError:
+        raise HddlUnsupported(f"{p}: not a text file; give a TOML sidecar") from None
     except tomllib.TOMLDecodeError as e:
         raise HddlUnsupported(f"{p}: not TOML ({e})") from None
+    except RecursionError:
+        raise HddlUnsupported(f"{p}: nested too deeply for a sidecar; see docs/hddl.md, "
+                              "\"The sidecar\"") from None
     return _sidecar_from(data, str(p))
+
+
+SCHEMA = "sidecar.schema.json"
+"""The JSON Schema of a sidecar's tables, shipped beside this module."""
+
+
+@cache
+def _schema_check() -> Callable[[Any], Any]:
+    """Return the compiled check of :data:`SCHEMA` (compiled once per process)."""
+    import fastjsonschema  # on first use
+
+    schema = json.loads(resources.files(__package__).joinpath(SCHEMA).read_text("utf-8"))
+    return cast(Callable[[Any], Any], fastjsonschema.compile(schema))
+
+
+def check_schema(data: Any, where: str) -> None:
+    """Raise :class:`HddlUnsupported` unless ``data`` (a sidecar's tables) has the shape the
+    sidecar's schema gives: every table and key known, lists where lists go, strings and
+    numbers where they go. The error names the first place that does not match, e.g.
+    ``side.toml: copresence.when: must be a list``."""
+    import fastjsonschema
+
+    try:
+        _schema_check()(data)
+    except fastjsonschema.JsonSchemaValueException as e:
+        name = str(e.name or "data")
+        place = name[len("data."):] if name.startswith("data.") else "the sidecar"
+        what = str(e.message)
+        if what.startswith(name + " "):
+            what = what[len(name) + 1:]
+        what = _SAY.get(what, what)
+        raise HddlUnsupported(f"{where}: {place}: {what[:200]}; see docs/hddl.md, "
+                              "\"The sidecar\"") from None
+    except RecursionError:
+        raise HddlUnsupported(f"{where}: nested too deeply for a sidecar; see docs/hddl.md, "
+                              "\"The sidecar\"") from None
+
+
+_SAY = {f"must be {kind}": f"must be {say}" for kind, say in [
+    ("integer", "a whole number"), ("number", "a number"), ("string", "a string"),
+    ("boolean", "true or false"), ("array", "a list"), ("object", "a table")]}
 
 
 def _printable(data: Mapping[str, Any], where: str) -> None:
@@ -125,7 +174,11 @@ def _printable(data: Mapping[str, Any], where: str) -> None:
 
 
 def _sidecar_from(data: Mapping[str, Any], where: str, check: bool = True) -> Sidecar:
+    if not isinstance(data, Mapping):
+        raise HddlUnsupported(f"{where}: SIDECAR must be a dict of tables; see docs/hddl.md, "
+                              "\"The sidecar\"")
     _printable(data, where)
+    check_schema(dict(data), where)
     for table, value in data.items():
         keys = _SIDECAR_KEYS.get(table)
         if keys is None:
@@ -175,4 +228,4 @@ def literal(text: str, where: str) -> tuple[bool, str, list[str]]:
     return m.group(1) is None, m.group(2), args
 
 
-__all__ = ["AGENTS", "CLASSES", "Sidecar", "literal", "read_sidecar"]
+__all__ = ["AGENTS", "CLASSES", "SCHEMA", "Sidecar", "check_schema", "literal", "read_sidecar"]
