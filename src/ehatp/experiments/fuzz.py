@@ -125,16 +125,16 @@ def fuzz_case(kind: str, seeds: Seeds, rng: random.Random,
     out = str(folder / "out")
     if kind == "problem":
         f = folder / "p.toml"
-        f.write_text(mutate_text(seeds.problem.read_text(encoding="utf-8"), rng),
-                     encoding="utf-8")
+        f.write_text(mutate_text(seeds.problem.read_text(encoding="utf-8"), rng,
+                                 edits=rng.randrange(1, 4)), encoding="utf-8")
         return ["solve", str(f), "--timeout", "5", "--max-states", "3000",
                 "--out", out + ".json"], None
     if kind in ("policy", "policy-json"):
         text = seeds.policy.read_text(encoding="utf-8")
         if kind == "policy":
-            text = mutate_text(text, rng)
+            text = mutate_text(text, rng, edits=rng.randrange(1, 4))
         else:
-            text = json.dumps(mutate_json(json.loads(text), rng))
+            text = json.dumps(mutate_json(json.loads(text), rng, edits=rng.randrange(1, 3)))
         f = folder / "p.json"
         f.write_text(text, encoding="utf-8")
         command = rng.choice((["show", str(f)], ["validate", str(seeds.problem), str(f)],
