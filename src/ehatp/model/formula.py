@@ -347,29 +347,31 @@ def negate(f: Formula) -> Formula:
 
 
 def simplify_and(parts: Iterable[Formula]) -> Formula:
-    out: list[Formula] = []
+    """The conjunction of ``parts``: FALSE if one is, TRUE ones left out, nested conjunctions
+    flattened, each conjunct once (in the order first met; a dict, not a list, so that the
+    forall over a few hundred objects stays linear)."""
+    out: dict[Formula, None] = {}
     for p in parts:
         if p == FALSE:
             return FALSE
         if p == TRUE:
             continue
         for q in p.args if isinstance(p, And) else (p,):
-            if q not in out:
-                out.append(q)
-    return out[0] if len(out) == 1 else And(tuple(out))
+            out[q] = None
+    return next(iter(out)) if len(out) == 1 else And(tuple(out))
 
 
 def simplify_or(parts: Iterable[Formula]) -> Formula:
-    out: list[Formula] = []
+    """The disjunction of ``parts``, as :func:`simplify_and` builds a conjunction."""
+    out: dict[Formula, None] = {}
     for p in parts:
         if p == TRUE:
             return TRUE
         if p == FALSE:
             continue
         for q in p.args if isinstance(p, Or) else (p,):
-            if q not in out:
-                out.append(q)
-    return out[0] if len(out) == 1 else Or(tuple(out))
+            out[q] = None
+    return next(iter(out)) if len(out) == 1 else Or(tuple(out))
 
 
 def ground_atoms(f: Formula) -> set[int]:

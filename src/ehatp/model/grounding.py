@@ -69,6 +69,11 @@ class _Grounder:
                  eager: int | None = None) -> None:
         self.p = problem
         self.check = check or no_check
+        # while the problem is grounded ahead (before anything uses it), the limit is also
+        # looked at inside one formula's grounding (a quantifier over hundreds of objects can
+        # take seconds); grounding on demand stops only between tasks, never in one
+        self._ahead = True
+        self._atoms_met = 0
         self.eager = problem.limits.ground_ahead if eager is None else eager
         self.d: Domain = problem.domain
         self.objects = problem.all_objects()
@@ -109,6 +114,7 @@ class _Grounder:
         robot, human, rh, beliefs = self._models(init, r_ag, h_ag)
         cop_f = self.ground_f(self.d.copresence, {})
         goal_f = self._goal()
+        self._ahead = False
         return Grounded(
             problem=self.p, atoms=self.atoms, atom_index=self.atom_index,
             task_names=self.task_names, task_index=self.task_index, robot=robot, human=human,
@@ -293,6 +299,10 @@ class _Grounder:
         return fn
 
     def atom(self, pred: str, args: tuple[str, ...]) -> Formula:
+        if self._ahead:
+            self._atoms_met += 1
+            if not self._atoms_met & 1023:
+                self.check()
         if pred in self.d.counters:  # balls(b1, 2), the value view: balls(b1) = 2
             c = self.d.counters[pred]
             if len(args) != len(c.params) + 1 or not args[-1].isdigit():

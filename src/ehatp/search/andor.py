@@ -156,7 +156,7 @@ class _Search:
         # worst case: stop as soon as the optimum is proven; expected cost: explore everything
         self.early_stop = grounded.problem.objective.kind == ObjectiveKind.WORST_CASE
         self.hfn = Heuristic(grounded) if self.early_stop and heuristic else None
-        sym = detect(grounded) if symmetry else None
+        sym = detect(grounded, budget.check) if symmetry else None
         self.sem = Semantics(grounded) if sym is None else SymSemantics(grounded, sym)
         self.sem.bound(budget.check)
         self.graph = Graph(self.sem)

@@ -100,7 +100,12 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
         return grounded
     settings = _Settings(max_states, max_depth, _symmetry.enabled(symmetry, problem.limits),
                          heuristic, expand)
-    out = _search(grounded, budget, live, settings)
+    try:
+        out = _search(grounded, budget, live, settings)
+    except LimitReached as e:  # before the first state: looking for symmetry, the bound
+        stats = live.as_dict()
+        stats["time_ms"] = round(budget.elapsed() * 1000, 1)
+        return Result(e.status, None, stats, e.reason)
     stats = out.stats.as_dict()
     stats["atoms"] = len(grounded.atoms)
     status, reason, optimal = out.status, out.reason, out.optimal

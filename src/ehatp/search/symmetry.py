@@ -469,10 +469,12 @@ def fixed_objects(grounded: Grounded) -> set[str]:
     return out
 
 
-def detect(grounded: Grounded) -> Symmetry | None:
+def detect(grounded: Grounded,
+           check: Callable[[], None] | None = None) -> Symmetry | None:
     """The classes of interchangeable objects of ``g`` (docs/semantics.md §3), or None when
     there is none (or the problem uses a feature the reduction does not cover: partially
-    ordered methods; a model too large to ground ahead, ``[limits] ground_ahead``)."""
+    ordered methods; a model too large to ground ahead, ``[limits] ground_ahead``).
+    ``check`` (a limit's) is called between the swaps tried and while each is compared."""
     models = _models(grounded)
     if any(model.lazy for model in models):  # grounded on demand: the whole model is not known
         return None
@@ -493,13 +495,13 @@ def detect(grounded: Grounded) -> Symmetry | None:
     # a Symmetry over every candidate gives the renamings to test; the real one is built on
     # the classes found
     trial = Symmetry(grounded, cands)
-    check = _Checker(grounded, trial, models)
+    checker = _Checker(grounded, trial, models, check)
     classes: list[list[str]] = []
     for cand in cands:
         found: list[list[str]] = []
         for o in cand:
             for cls in found:
-                if check.swap(cls[0], o):
+                if checker.swap(cls[0], o):
                     cls.append(o)
                     break
             else:
@@ -520,8 +522,10 @@ def _models(grounded: Grounded) -> list[GModel]:
 class _Checker:
     """Whether swapping two objects maps the ground problem onto itself."""
 
-    def __init__(self, grounded: Grounded, sym: Symmetry, models: list[GModel]) -> None:
+    def __init__(self, grounded: Grounded, sym: Symmetry, models: list[GModel],
+                 check: Callable[[], None] | None = None) -> None:
         self.grounded, self.sym, self.models = grounded, sym, models
+        self.check = check
         self.formula_of = {id(fn): f for f, fn in grounded.fns.items()}
 
     def swap(self, a: str, b: str) -> bool:
@@ -529,6 +533,8 @@ class _Checker:
         problem's data (:meth:`_same_problem`) and every model (:meth:`_same_model`) map
         onto themselves."""
         sym = self.sym
+        if self.check is not None:
+            self.check()
         p = list(range(len(sym.objects)))
         i, j = sym.index[a], sym.index[b]
         p[i], p[j] = j, i
@@ -571,7 +577,10 @@ class _Checker:
         effects, cost, done-condition), methods (precondition, subtasks, order) and
         done-conditions onto the renamed tasks' own."""
         st, ag, f, fn, tmap = ren.state, ren.agenda, ren.formula, ren.condition, ren.tmap
-        for t, op in model.ops.items():
+        check = self.check
+        for n, (t, op) in enumerate(model.ops.items()):
+            if check is not None and not n & 63:
+                check()
             o2 = model.ops.get(tmap.get(t, t))
             if o2 is None or op.cost != o2.cost or st(op.add) != o2.add \
                     or st(op.dele) != o2.dele or f(op.pre_f) != f(o2.pre_f, False) \
@@ -581,7 +590,9 @@ class _Checker:
             c2 = Counter((fn(c, False), a, d) for c, a, d in o2.cond)
             if c1 != c2:
                 return False
-        for t, methods in model.methods.items():
+        for n, (t, methods) in enumerate(model.methods.items()):
+            if check is not None and not n & 63:
+                check()
             methods2 = model.methods.get(tmap.get(t, t))
             if methods2 is None:
                 return False
