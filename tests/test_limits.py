@@ -17,6 +17,7 @@ import pytest
 import ehatp
 from ehatp.experiments.bench import GridPoint
 from ehatp.formats.policy import Policy
+from ehatp.formats.problem_toml import loads
 from ehatp.model.problem import parse_size
 from ehatp.search import andor, values
 from ehatp.search.limits import Budget, LimitReached
@@ -377,3 +378,18 @@ def test_the_watchdog_watches_resident_memory(tmp_path: Path) -> None:
                          timeout=60, env={**os.environ, "PYTHONPATH": src})
     assert out.returncode == 7
     assert "greedy work: stopped, memory limit of 200 MB reached" in out.stderr
+
+
+@pytest.mark.slow  # about 3 s
+@pytest.mark.parametrize(("cubes", "boxes"), [(40, 10), (80, 20)])
+def test_a_timeout_stops_grounding_and_symmetry_detection_in_time(cubes: int,
+                                                                  boxes: int) -> None:
+    # grounding these takes far longer than 2 s (80 cubes / 20 boxes: minutes), and one
+    # formula's grounding or one tried swap can take seconds: the limit is looked at inside
+    p = loads(GridPoint("cubes", 2, cubes=cubes, boxes=boxes).toml(), "big.toml")
+    t0 = time.perf_counter()
+    r = ehatp.solve(p, timeout=2)
+    took = time.perf_counter() - t0
+    assert r.status == "timeout" and r.policy is None
+    assert "time limit of 2 s" in r.reason
+    assert took < 2 * 1.05 + 0.5 + 1.5  # the hard limit, and one step past it
