@@ -21,6 +21,7 @@ from ..model.options import Intentions, Speech
 from ..model.problem import Problem
 from ..model.vocabulary import HUMAN, ROBOT, Agent
 from .communication import INTENTION, Semantics
+from .concurrent import JointRules
 from .lifted import LiftedCheck, shown
 from .rules import ACTION, ASK, INFORM, PASS, SILENCE, EState, Step, _num, _same
 
@@ -93,7 +94,8 @@ class Replay:
                  check: Callable[[], None] | None = None) -> None:
         self.problem = problem
         self.policy = policy
-        self.sem = Semantics(problem, check)
+        self.sem = (JointRules(problem, check) if problem.steps.concurrent
+                    else Semantics(problem, check))
         self.violations: list[str] = []
         self.nodes_checked = 0
         self.goals_reached: set[int] = set()  # goal leaves whose branch checked out
@@ -126,6 +128,8 @@ class Replay:
         """The robot moves a policy label can denote here (§4, §5), or why it is not an
         option."""
         sem, g = self.sem, self.sem.grounded
+        if isinstance(sem, JointRules):
+            return self.reply_steps(sem, es, label)
         if es.opening:
             if label == SILENCE:
                 return [sem.silence(es)]
@@ -192,6 +196,28 @@ class Replay:
         agenda = sem.shown(es.robot)
         return f"{label} is not the first action of any refinement of the robot agenda " \
                f"{agenda} under T"
+
+    def reply_steps(self, sem: JointRules, es: EState, label: str) -> list[Step] | str:
+        """docs/concurrent.md C3-C9: the robot replies a label can denote at a reply node, or
+        why it is none."""
+        if not es.pending:
+            return "the robot replies only once the human has chosen its move (C4)"
+        steps, mids = sem.replies(es)
+        if label.startswith("inform("):
+            mid, heard = mids[0]
+            if not heard:
+                return ("the human does not hear an inform in this step: it does not witness "
+                        'it (C8) and [communication] inform is not "anywhere"')
+            r = self.inform_atoms(mid, label, " after the human's move (C2, §5)")
+            return r if isinstance(r, str) else [sem.joint_inform(mid, r)]
+        found = [st for st in steps if st.label == label]
+        if found:
+            return found
+        if label == "wait":
+            return "(pass, wait) is never a step (C3, C5)"
+        return (f"{label} is not an admissible reply to the human's move here (C3: still an "
+                "option after it, the same state either way, no common resource); "
+                f"admissible: {[st.label for st in steps]}")
 
     def inform_atoms(self, es: EState, label: str, when: str = "") -> list[int] | str:
         """The units of ``inform(...)`` (atoms, state variables, counters, as masks) in label
@@ -555,6 +581,11 @@ class Replay:
             self.fail(cpath, f"{where}: told is {list(move.told)}, but the move says "
                       + (f"{list(st.told)}" if st.told else "nothing")
                       + " (speech, §5)")
+            return False
+        want_step = self.sem.step_of(st) if isinstance(self.sem, JointRules) else ""
+        if move.step != want_step:
+            self.fail(cpath, f"{where}: step is {move.step!r}, expected {want_step!r} "
+                      "(docs/concurrent.md: the moves of a joint step)")
             return False
         if not _same(move.cost, st.cost):
             self.fail(cpath, f"{where}: cost is {move.cost}, but the move costs "

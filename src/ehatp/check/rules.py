@@ -49,6 +49,9 @@ class EState:
     forced: bool = False
     opening: bool = False
     answering: bool = False
+    # joint steps (docs/concurrent.md): at a reply node, the human's move the robot replies
+    # to; empty at a step's start and in turn-taking
+    pending: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)

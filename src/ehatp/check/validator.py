@@ -55,7 +55,7 @@ from .communication import Semantics
 from .lifted import Lifted, LiftedCheck, lifted_of
 from .network import Agenda, Block
 from .replay import Replay
-from .rules import EState, Step
+from .rules import EState, Step, _same
 from .summary import check_costs, check_objective, check_summary
 
 _Semantics = Semantics  # its older name (tests and notebooks use it)
@@ -155,6 +155,15 @@ def _header(rp: Replay) -> bool:
         rp.fail([], f"policy K is {pol.K}, the problem's is {sem.K}")
     if pol.agents != {"robot": sem.names[ROBOT], "human": sem.names[HUMAN]}:
         rp.fail([], f"policy agents {pol.agents} are not the domain's")
+    st = rp.problem.steps
+    want = ({"mode": st.mode.value, "first": st.first.value, "witness": st.witness.value,
+             "commute": st.commute.value, "cost": st.cost} if st.concurrent else None)
+    same = (pol.step_options == want or pol.step_options is not None and want is not None
+            and {**pol.step_options, "cost": 0} == {**want, "cost": 0}
+            and _same(pol.step_options.get("cost"), want["cost"]))
+    if not same:
+        rp.fail([], f"policy steps are {pol.step_options}, the problem's [steps] are {want} "
+                "(docs/concurrent.md)")
     return True
 
 

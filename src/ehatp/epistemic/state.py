@@ -32,6 +32,9 @@ class EState(NamedTuple):
     forced: bool = False  # human node: the robot's last move was a forced wait (§4)
     opening: bool = False  # robot node: the speech opening before the human's first move (§5)
     answering: bool = False  # human node: the human answers the robot's question (§5)
+    # a joint step's reply node: the move decided first, the other agent to reply
+    # (docs/concurrent.md, C4; empty in turn-taking and at a step's start)
+    pending: tuple[int, ...] = ()
 
 
 def normalize(worlds: Iterable[World]) -> Worlds:

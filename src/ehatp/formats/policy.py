@@ -78,6 +78,10 @@ class PolicyMove:
     # version 3: the renaming (an index into the policy's symmetry table) that maps the move's
     # child, seen from this node, onto the node ``to``; 0 (the identity) is not written
     renaming: int = 0
+    # joint steps (docs/concurrent.md): "human" (the human's move that starts a step),
+    # "reply" (the robot's compliant reply that ends it), "ask" (a question: a whole step,
+    # the robot's answer implied); "" in turn-taking, and not written
+    step: str = ""
 
     @property
     def communicates(self) -> bool:
@@ -87,7 +91,8 @@ class PolicyMove:
     def to_dict(self) -> dict[str, Any]:
         return {"agent": self.agent, "kind": self.kind, "action": self.action,
                 "name": self.name, "args": self.args, "cost": num(self.cost), "to": self.to,
-                "told": self.told, **({"renaming": self.renaming} if self.renaming else {})}
+                "told": self.told, **({"renaming": self.renaming} if self.renaming else {}),
+                **({"step": self.step} if self.step else {})}
 
 
 @dataclass
@@ -226,6 +231,9 @@ class Policy:
     # version 3, a lifted policy: {"objects": [...], "classes": [[...], ...], "renamings":
     # [[int, ...], ...], "root": int}; None for a policy over real states (version 2)
     symmetry: dict[str, Any] | None = None
+    # joint steps (docs/concurrent.md): the problem's [steps] table ({"mode": "concurrent",
+    # "first", "witness", "commute", "cost"}); None in turn-taking, and not written
+    step_options: dict[str, Any] | None = None
 
     @property
     def lifted(self) -> bool:
@@ -329,6 +337,7 @@ class Policy:
             "worst_case": None if self.worst_case is None else num(self.worst_case),
             "expected": None if self.expected is None else num(self.expected),
             **({"symmetry": self.symmetry} if self.symmetry is not None else {}),
+            **({"steps": self.step_options} if self.step_options is not None else {}),
         }
 
     def to_dict(self, check: Callable[[], None] | None = None) -> dict[str, Any]:
@@ -396,7 +405,8 @@ class Policy:
                    d["communications"], d["leaves"], d.get("optimal", True), d.get("stats", {}),
                    d.get("after", []), d.get("objective", {"kind": "worst-case"}),
                    d.get("worst_case"), d.get("expected"),
-                   _symmetry(d["symmetry"]) if version == VERSION_LIFTED else None)
+                   _symmetry(d["symmetry"]) if version == VERSION_LIFTED else None,
+                   d.get("steps"))
 
     @classmethod
     def read(cls, path: str | Path) -> Policy:

@@ -27,7 +27,7 @@ from typing import Any
 
 from ..errors import DomainError, InputError, control_char
 from ..model.domain import AGENT_TYPE, Domain, is_domain_factory
-from ..model.options import OPTION_KEYS, read_options
+from ..model.options import OPTION_KEYS, read_options, read_steps
 from ..model.problem import (
     BeliefWorld,
     Checker,
@@ -71,7 +71,7 @@ _TABLE_KEYS: dict[str, frozenset[str]] = {
     **OPTION_KEYS,
 }
 _TOP_TABLES = {"problem", "domain", "objects", "init", "beliefs", "agenda", "costs", "limits",
-               "options", "human", "communication", "objective"}
+               "options", "human", "communication", "objective", "steps"}
 _TOP_VALUES = {"goal"}  # top-level keys that are not tables
 _TOP_KEYS = _TOP_TABLES | _TOP_VALUES
 
@@ -253,11 +253,12 @@ def loads(text: str, path: str | Path, overrides: Mapping[str, Any] | None = Non
     goal = _goal(r, data, atom)
     costs, limits = _costs(r, data, domain), _limits(r, data)
     human, communication, objective, notes = read_options(r, data)
+    steps = read_steps(r, data)
     after = tuple(r.strings("[problem] after", prob.get("after", [])))
     return Problem(name=name, domain=domain, objects=objects, init=init,
                    robot_agenda=agendas["robot"], human_agenda=agendas["human"], beliefs=beliefs,
                    starts=starts, K=K, costs=costs, limits=limits, human=human,
-                   communication=communication, objective=objective, notes=notes,
+                   communication=communication, objective=objective, steps=steps, notes=notes,
                    goal=goal, after=after, description=description,
                    source=str(path))
 

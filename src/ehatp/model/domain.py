@@ -423,6 +423,8 @@ class Operator:
     cost: int | float
     done: Formula | None
     types: TypeHierarchy | None = field(default=None, repr=False)
+    # what the action holds while it runs: parameters or constants (docs/concurrent.md, C3 c)
+    resources: tuple[Term, ...] = ()
 
     def __call__(self, *args: Term) -> TaskRef:
         _check_args("action", self.name, self.params, args, self.types)
@@ -494,12 +496,23 @@ class AgentModel:
         effects: Iterable[Effect] = (),
         cost: int | float = 1,
         done: Formula | None = None,
+        resources: Iterable[Term] = (),
     ) -> Operator:
-        """Declare a primitive action of this agent."""
+        """Declare a primitive action of this agent. ``resources`` (parameters, or names)
+        are what it holds while it runs: in joint steps two actions that hold a common one
+        are never done together (docs/concurrent.md, C3 c)."""
         self._fresh(name)
         if cost <= 0:
             raise DomainError(f"{self.agent}.{name}: cost must be positive, got {cost}")
-        op = Operator(name, tuple(params), pre, tuple(effects), cost, done, self.types)
+        held = tuple(resources)
+        for x in held:
+            if isinstance(x, Var) and x not in params:
+                raise DomainError(f"action {name}: resource {x} is not one of its parameters; "
+                                  "name a parameter or a constant")
+            if not isinstance(x, Var | str):
+                raise DomainError(f"action {name}: resource {x!r} is neither a parameter nor "
+                                  "a name")
+        op = Operator(name, tuple(params), pre, tuple(effects), cost, done, self.types, held)
         _check_scope(f"action {name}", set(params), [pre, *([done] if done else [])])
         # an effect with a variable the action does not bind could only fail when grounded
         loose = _effect_vars(f"action {name}", op.effects) - set(params)

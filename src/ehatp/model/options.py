@@ -52,6 +52,34 @@ class Relevance(StrEnum):
     PLAN = "plan"  # also those that make a later step of the human's agenda fail or differ
 
 
+class StepMode(StrEnum):
+    """How the agents move (docs/concurrent.md): in turns (§4), or in joint steps (C1-C12)."""
+
+    TURNS = "turns"  # one agent acts, then the other (the paper)
+    CONCURRENT = "concurrent"  # both act in every step, the robot compliant (C1-C12)
+
+
+class StepFirst(StrEnum):
+    """Who decides first in a joint step (C4)."""
+
+    HUMAN = "human"  # AND over the human's options, then OR over the robot's replies
+    ROBOT = "robot"  # OR over the robot's options, then AND over the human's
+
+
+class Witness(StrEnum):
+    """When the human witnesses the robot's action of a joint step (C8)."""
+
+    WHOLE = "whole"  # co-present before and after the human's action
+    START = "start"  # co-present before the step
+
+
+class Commute(StrEnum):
+    """What makes two actions of a step admissible together (C3 b)."""
+
+    STATE = "state"  # both orders reach the same state
+    LABEL = "label"  # each action is still an option after the other (the authors' planner)
+
+
 class ObjectiveKind(StrEnum):
     """What the policy's cost is (§6-§7)."""
 
@@ -66,6 +94,7 @@ OPTION_KEYS: dict[str, frozenset[str]] = {
     "communication": frozenset({"inform", "speech", "relevance", "ask", "inform_max_atoms",
                                 "plan_horizon", "robot_asks", "announce"}),
     "objective": frozenset({"kind", "weights", "ties"}),
+    "steps": frozenset({"mode", "first", "witness", "commute", "cost"}),
 }
 
 
@@ -109,6 +138,22 @@ class Communication:
     plan_horizon: int = 8  # human steps looked ahead by relevance = "plan"
     robot_asks: bool = False  # the robot may ask the human what it is about to do (§5)
     announce: bool = False  # the robot may announce its own agenda (§5)
+
+
+@dataclass(frozen=True)
+class Steps:
+    """``[steps]``: turn-taking (the default) or joint, compliant steps (docs/concurrent.md)."""
+
+    mode: StepMode = StepMode.TURNS
+    first: StepFirst = StepFirst.HUMAN  # C4
+    witness: Witness = Witness.WHOLE  # C8
+    commute: Commute = Commute.STATE  # C3 b
+    cost: Fraction | int = 1  # C11: c_step, what one joint step costs
+
+    @property
+    def concurrent(self) -> bool:
+        """Return whether the agents move in joint steps (C1-C12)."""
+        return self.mode == StepMode.CONCURRENT
 
 
 @dataclass(frozen=True)
@@ -217,6 +262,40 @@ def read_options(r: _Reader, data: Mapping[str, Any]
     return human, comm, objective, tuple(notes)
 
 
-__all__ = ["DEFAULT_TIES", "OPTION_KEYS", "TIE_KEYS", "Communication", "HumanModel", "InformWhere",
-           "Intentions", "Objective", "ObjectiveKind", "Passes", "Relevance", "Speech",
-           "TieKey", "read_options"]
+# [communication] and [problem] settings joint steps do not read (docs/concurrent.md)
+_NOT_CONCURRENT = (
+    ("communication", "speech", "with-action",
+     "speech is part of a joint step already: leave [communication] speech out"),
+    ("communication", "robot_asks", True, "leave [communication] robot_asks out"),
+    ("communication", "announce", True, "leave [communication] announce out"),
+)
+
+
+def read_steps(r: _Reader, data: Mapping[str, Any]) -> Steps:
+    """Return the ``[steps]`` table (docs/concurrent.md: mode, first, witness, commute, cost);
+    a setting joint steps do not support is one error naming it."""
+    t = r.table(data, "steps", OPTION_KEYS["steps"])
+    cost = t.get("cost", 1)
+    if isinstance(cost, bool) or not isinstance(cost, int | float) or cost <= 0:
+        raise r.err("[steps] cost", f"expected a positive number, got {cost!r}",
+                    "write e.g. cost = 1", "cost")
+    steps = Steps(_choice(r, "steps", t, "mode", StepMode, StepMode.TURNS),
+                  _choice(r, "steps", t, "first", StepFirst, StepFirst.HUMAN),
+                  _choice(r, "steps", t, "witness", Witness, Witness.WHOLE),
+                  _choice(r, "steps", t, "commute", Commute, Commute.STATE),
+                  cost if isinstance(cost, int) else Fraction(str(cost)))
+    if steps.concurrent:
+        for table, key, bad, fix in _NOT_CONCURRENT:
+            if data.get(table, {}).get(key) == bad:
+                raise r.err(f"[{table}] {key}", f"{key} = {bad!r} is not supported with "
+                            '[steps] mode = "concurrent"', fix, key)
+        if data.get("problem", {}).get("after"):
+            raise r.err("[problem] after", 'an opening is not supported with [steps] mode = '
+                        '"concurrent"', "leave [problem] after out", "after")
+    return steps
+
+
+__all__ = ["DEFAULT_TIES", "OPTION_KEYS", "TIE_KEYS", "Commute", "Communication", "HumanModel",
+           "InformWhere", "Intentions", "Objective", "ObjectiveKind", "Passes", "Relevance",
+           "Speech", "StepFirst", "StepMode", "Steps", "TieKey", "Witness", "read_options",
+           "read_steps"]

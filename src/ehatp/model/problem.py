@@ -21,7 +21,7 @@ from .._deprecated import moved_names
 from ..errors import InputError
 from .domain import AGENT_TYPE, Domain, article, signature
 from .formula import Var
-from .options import Communication, HumanModel, Objective
+from .options import Communication, HumanModel, Objective, Steps
 
 Cost = int | Fraction
 GroundAtom = tuple[str, tuple[str, ...]]
@@ -77,6 +77,8 @@ class Problem:
     human: HumanModel = field(default_factory=HumanModel)
     communication: Communication = field(default_factory=Communication)
     objective: Objective = field(default_factory=Objective)
+    # turns (§4) or joint, compliant steps (docs/concurrent.md)
+    steps: Steps = field(default_factory=Steps)
     goal: tuple[tuple[bool, GroundAtom], ...] = ()
     # a fixed opening line of play (move labels); the policy starts where it ends
     after: tuple[str, ...] = ()

@@ -30,6 +30,7 @@ import dataclasses
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from ..epistemic.concurrent import ConcurrentSemantics
 from ..epistemic.semantics import (
     ACTION,
     ANNOUNCE,
@@ -133,6 +134,16 @@ class _TracingSemantics(Semantics):
         return out
 
 
+class _TracingJoint(ConcurrentSemantics, _TracingSemantics):
+    """Joint steps (docs/concurrent.md), remembering situation assessment likewise: a step is
+    the human's move observed, then the robot's compliant reply."""
+
+
+def _tracing(g: Grounded) -> _TracingSemantics:
+    """Return the problem's semantics (turns, or joint steps) with assessment traced."""
+    return _TracingJoint(g) if g.problem.steps.concurrent else _TracingSemantics(g)
+
+
 def human_agendas(es: EState) -> tuple[Agenda, ...]:
     """Return the human agendas the robot cannot tell apart at ``es`` (docs/semantics.md §3,
     "What the robot observes"): the one place the executor reads them."""
@@ -161,7 +172,7 @@ class Executor:
         self._lifted: Renamings | None = None
         self.tau: Perm = ()  # lifted: the renaming from the current node to the real state
         self._use(policy)
-        self.sem = _TracingSemantics(self.grounded)
+        self.sem = _tracing(self.grounded)
         self.robot_name, self.human_name = self.sem.names
         self.state: EState = self.sem.initial()
         self.initial_assessed = self.sem.seen.get((self.state.true, self.state.worlds))

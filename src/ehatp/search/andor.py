@@ -40,7 +40,8 @@ import heapq
 import time
 from dataclasses import dataclass
 
-from ..epistemic.semantics import DEAD_PASSIVE_RUN, Semantics
+from ..epistemic.concurrent import semantics_for
+from ..epistemic.semantics import DEAD_PASSIVE_RUN
 from ..epistemic.state import EState
 from ..errors import InputError
 from ..model.grounded import Grounded
@@ -155,9 +156,11 @@ class _Search:
         self.max_states, self.max_depth = max_states, max_depth
         # worst case: stop as soon as the optimum is proven; expected cost: explore everything
         self.early_stop = grounded.problem.objective.kind == ObjectiveKind.WORST_CASE
-        self.hfn = Heuristic(grounded) if self.early_stop and heuristic else None
-        sym = detect(grounded, budget.check) if symmetry else None
-        self.sem = Semantics(grounded) if sym is None else SymSemantics(grounded, sym)
+        # joint steps (docs/concurrent.md) have no lower bound nor symmetry reduction yet
+        joint = grounded.problem.steps.concurrent
+        self.hfn = Heuristic(grounded) if self.early_stop and heuristic and not joint else None
+        sym = detect(grounded, budget.check) if symmetry and not joint else None
+        self.sem = semantics_for(grounded) if sym is None else SymSemantics(grounded, sym)
         self.sem.bound(budget.check)
         self.graph = Graph(self.sem)
         self.root = self._add_root(self._opening(grounded))

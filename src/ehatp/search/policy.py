@@ -8,7 +8,7 @@ from dataclasses import replace
 from itertools import combinations
 from typing import Any
 
-from ..epistemic.semantics import ACTION, WAIT, Move, bits_of
+from ..epistemic.semantics import ACTION, ASK, WAIT, Move, bits_of
 from ..epistemic.state import HUMAN, ROBOT, EState
 from ..formats.policy import Policy, PolicyMove, PolicyNode, num, topological_order
 from ..model.options import Objective, ObjectiveKind
@@ -128,9 +128,12 @@ def _policy_move(gr: Graph, e: Edge, index: dict[int, int],
     if move.kind in (ACTION, WAIT) and move.atoms:  # said with a move (§5): as it is after
         assert move.child is not None
         told = list(sem.literals(move.child.true, move.atoms))
+    step = ""
+    if sem.grounded.problem.steps.concurrent:  # docs/concurrent.md: the moves of a step
+        step = "ask" if move.kind == ASK else "human" if move.agent == HUMAN else "reply"
     return PolicyMove(agent=sem.names[move.agent], kind=str(move.kind), action=label,
                       name=str(name), args=list(call_args), cost=move.cost, to=index[e.child],
-                      told=told, renaming=renaming)
+                      told=told, renaming=renaming, step=step)
 
 
 def _policy_node(gr: Graph, i: int, n: int, moves: list[PolicyMove]) -> PolicyNode:
@@ -182,6 +185,11 @@ def _policy(p: Problem, problem_name: str, nodes: list[PolicyNode], optimal: boo
                                                   "human": p.domain.human_name}, p.K,
                     costs, nodes, own[0], 0, 0, optimal, stats, list(p.after), objective,
                     worst[0], mean[0])
+    if p.steps.concurrent:
+        st = p.steps
+        policy.step_options = {"mode": st.mode.value, "first": st.first.value,
+                        "witness": st.witness.value, "commute": st.commute.value,
+                        "cost": num(st.cost)}
     policy.leaves = policy.count_branches()
     policy.communications = policy.count_communications()
     return policy

@@ -1,0 +1,315 @@
+"""Joint, compliant steps (docs/concurrent.md, the specification's rules C1-C12): the planner's
+reading.
+
+In ``[steps] mode = "concurrent"`` both agents act in every step. The search keeps its AND/OR
+graph: a step is two moves of the graph,
+
+- a *decision node* (C1: a node at the start of a step, ``pending`` empty, the human to
+  move): one AND branch per human option ``h`` (C2, C5); its move costs nothing;
+- a *reply node* (the same node with ``h`` chosen: ``pending`` holds it, the robot to move):
+  one OR option per robot reply ``r`` admissible with ``h`` (C3); its move costs the step
+  (C11: ``[steps] cost``, default 1, plus the communication it makes) and leads to the next
+  decision node with both effects applied (C6) and the human's worlds updated (C7-C8).
+
+A reply node records the true state, the worlds and ``k`` of the step's start (what the robot
+saw when the human started), and the human agendas after ``h`` (what the robot learnt by
+seeing it: C9). A question ``ask(phi)`` is a whole step (C3: its only reply is the robot's
+truthful answer), so its move leads straight to the next decision node and costs the step and
+the question.
+
+Turn-taking (:class:`~.semantics.Semantics`) is untouched: this class is used only when a
+problem asks for joint steps (:func:`semantics_for`).
+"""
+
+from __future__ import annotations
+
+from ..errors import InputError
+from ..model.formula import Formula, Var
+from ..model.grounded import FINISH, GOp, Grounded
+from ..model.htn import Agenda
+from ..model.options import (
+    Commute,
+    InformWhere,
+    Intentions,
+    Passes,
+    Speech,
+    StepFirst,
+    Witness,
+)
+from ..model.vocabulary import Agent
+from .semantics import (
+    ACTION,
+    ASK,
+    INFORM,
+    PASS,
+    WAIT,
+    Move,
+    Semantics,
+    _hypotheses,
+    _relabel,
+)
+from .state import HUMAN, ROBOT, EState, World, Worlds, normalize
+
+H_ACTION, H_PASS = 0, 1  # what a reply node's ``pending`` starts with: the human's choice
+
+
+def semantics_for(grounded: Grounded) -> Semantics:
+    """Return the transition rules the problem asks for: turn-taking (§4) by default, joint
+    steps (C1-C12) under ``[steps] mode = "concurrent"``."""
+    if grounded.problem.steps.concurrent:
+        return ConcurrentSemantics(grounded)
+    return Semantics(grounded)
+
+
+def check_concurrent(grounded: Grounded) -> None:
+    """Raise :class:`InputError` when the problem combines joint steps with a setting they do
+    not read (docs/concurrent.md, "Open points"): speech with an action, the robot's
+    question or announcement, an opening, or the robot deciding first (not built yet)."""
+    p = grounded.problem
+    bad = []
+    if p.communication.speech == Speech.WITH_ACTION:
+        bad.append(('[communication] speech', 'leave speech out: a joint step already lets '
+                    'the robot inform while the human acts'))
+    if p.communication.robot_asks:
+        bad.append(("[communication] robot_asks", "leave robot_asks out"))
+    if p.communication.announce:
+        bad.append(("[communication] announce", "leave announce out"))
+    if p.after:
+        bad.append(("[problem] after", "leave the opening out"))
+    if p.steps.first == StepFirst.ROBOT:
+        bad.append(("[steps] first", 'first = "robot" is not built yet: use first = "human"'))
+    if bad:
+        place, fix = bad[0]
+        raise InputError(p.source, place, 'not supported with [steps] mode = "concurrent"', fix)
+
+
+class ConcurrentSemantics(Semantics):
+    """The rules C1-C12 of docs/concurrent.md (``first = "human"``: the compliant robot)."""
+
+    def __init__(self, grounded: Grounded) -> None:
+        check_concurrent(grounded)
+        super().__init__(grounded)
+        self.steps = grounded.problem.steps
+        self._held: dict[tuple[Agent, int], frozenset[str]] = {}
+
+    # -- C1: nodes ------------------------------------------------------------------------
+    def initial(self) -> EState:
+        """C1: the root is a decision node (the human decides first, C4); who "starts" in
+        turn-taking does not matter."""
+        return super().initial()._replace(turn=HUMAN)
+
+    def is_goal(self, es: EState) -> bool:
+        """C10: a decision node that is a goal of §6 (a reply node never is: a step is under
+        way)."""
+        return not es.pending and super().is_goal(es)
+
+    def moves(self, es: EState) -> list[Move]:
+        """C4: at a decision node the human's options (AND), at a reply node the robot's
+        admissible replies (OR)."""
+        return self.replies(es) if es.pending else self.decisions(es)
+
+    # -- C2, C5: the human's options ---------------------------------------------------------
+    def robot_actions(self, es: EState) -> list[tuple[GOp, Agenda]]:
+        """C2: the robot's real action options at the step's start: the first actions of its
+        refinements under T, while co-present or ``k < K`` (C7.3: none once ``k = K``)."""
+        if not (self.copresent(es.true) or es.k < self.K):
+            return []
+        return [(self.robot_op(op), rest) for op, rest in self.R.refine(es.robot_agenda, es.true)
+                if op != FINISH]
+
+    def may_pass(self, es: EState, acts: bool, asks: bool, robot_acts: bool) -> bool:
+        """C5: whether one hypothesis of the human may pass: while co-present when the robot
+        has a real action (else ``(pass, wait)`` would be the step), or when the human has
+        nothing else to do (then the step needs a robot reply other than ``wait``); while
+        apart only with nothing else to do; under ``[human] passes = "idle"`` only with
+        nothing it could do."""
+        if self.human_model.passes == Passes.IDLE:
+            return not acts and not asks
+        if self.copresent(es.true):
+            return robot_acts or (not acts and not asks)
+        return not acts
+
+    def decisions(self, es: EState) -> list[Move]:
+        """C2-C5, C10: the human's options at a decision node, one AND branch per distinct
+        label over the hypotheses of ``A_H`` (§3-§4), each leading to the reply node where
+        the robot, having seen the human start, replies.
+
+        Pseudo-code::
+
+            robot_acts = the robot's real actions at T (C2)
+            for each hypothesis h of A_H:
+                acts, asks = h's certain actions and questions on W (§4)
+                pass is h's option by C5 (robot_acts, acts, asks, co-presence)
+            action a:  fails (child None) if a does not hold in T (C10: a false belief);
+                       else -> reply node (T, W, k unchanged; A_H := the agendas after a;
+                       pending = (H_ACTION, a)), cost 0 (the reply pays the step)
+            ask(phi):  the whole step (C3): W filtered on phi's value in T,
+                       -> next decision node, cost c_step + c_ask
+            pass:      -> reply node, pending = (H_PASS,), cost 0
+        """
+        robot_acts = bool(self.robot_actions(es))
+        acts: dict[int, list[Agenda]] = {}
+        asks: dict[str, tuple[Formula, list[Agenda]]] = {}
+        passers: list[Agenda] = []
+        for h in es.human_agendas:
+            h_acts, h_asks, _, _ = self.human_options(es._replace(forced=False), h)
+            for op, rest in h_acts:
+                acts.setdefault(op, []).append(rest)
+            for label, phi in h_asks.items():
+                asks.setdefault(label, (phi, []))[1].append(h)
+            if self.may_pass(es, bool(h_acts), bool(h_asks), robot_acts):
+                passers.append(h)
+        out: list[Move] = []
+        for op, rests in acts.items():
+            gop = self.grounded.human.ops[op]
+            if self.human_model.intentions == Intentions.VISIBLE:
+                for rest in dict.fromkeys(rests):
+                    move = self.human_starts(es, gop, (rest,))
+                    if len(rests) > 1:
+                        left = ", ".join(self.net.names_of(rest))
+                        move = _relabel(move, f"{move.label} [{left}]")
+                    out.append(move)
+            else:
+                out.append(self.human_starts(es, gop, _hypotheses(rests)))
+        for label, (phi, hs) in sorted(asks.items()):
+            asked = self.ask(es, phi)
+            out.append(Move(HUMAN, ASK, f"ask({label})", self.steps.cost + self.costs.ask,
+                            asked._replace(turn=HUMAN, human_agendas=_hypotheses(hs),
+                                           passive=0)))
+        if passers:
+            out.append(Move(HUMAN, PASS, "pass", 0,
+                            es._replace(turn=ROBOT, human_agendas=_hypotheses(passers),
+                                        pending=(H_PASS,))))
+        return out
+
+    def human_starts(self, es: EState, op: GOp, rests: tuple[Agenda, ...]) -> Move:
+        """C4, C10: the human starts ``op``: a failure when it does not hold in T (a false
+        belief), else the reply node. The move's ``waits`` flag marks a step in which the
+        human acts (C11's tie-break "human effort")."""
+        if not op.pre(es.true):
+            return Move(HUMAN, ACTION, op.name, 0, None, op.id,
+                        failure=f"{self.names[HUMAN]} does {op.name} on a false belief")
+        return Move(HUMAN, ACTION, op.name, 0,
+                    es._replace(turn=ROBOT, human_agendas=rests, pending=(H_ACTION, op.id)),
+                    op.id, waits=True)
+
+    # -- C3: admissible replies -----------------------------------------------------------
+    def held(self, agent: Agent, op: GOp) -> frozenset[str]:
+        """C3 c: the resources ground action ``op`` of ``agent`` declares (the DSL's
+        ``resources=``: parameters by their values, constants by name)."""
+        key = (agent, op.id)
+        r = self._held.get(key)
+        if r is None:
+            d = self.grounded.problem.domain
+            model = d.robot if agent == ROBOT else d.human
+            schema = model.operators.get(op.schema)
+            out: set[str] = set()
+            if schema is not None:
+                for x in schema.resources:
+                    if isinstance(x, Var):
+                        out.add(op.args[schema.params.index(x)])
+                    else:
+                        out.add(x)
+            r = self._held[key] = frozenset(out)
+        return r
+
+    def admissible(self, es: EState, hop: GOp, t_h: int, rop: GOp, rest: Agenda) -> bool:
+        """C3: whether the robot's ``rop`` (leaving ``rest``) may run in the same step as the
+        human's ``hop``: (a) ``rop`` is still an option after ``hop`` and ``hop`` still holds
+        after ``rop``; (b) under ``commute = "state"`` both orders reach the same state;
+        (c) they hold no common resource."""
+        t = es.true
+        if (rop.id, rest) not in self.R.refine(es.robot_agenda, t_h):
+            return False
+        t_r = rop.apply(t)
+        if not hop.pre(t_r):
+            return False
+        if self.steps.commute == Commute.STATE and hop.apply(t_r) != rop.apply(t_h):
+            return False
+        return not (self.held(ROBOT, rop) & self.held(HUMAN, hop))
+
+    def replies(self, es: EState) -> list[Move]:
+        """C3-C9: the robot's replies at a reply node, each a whole step to the next decision
+        node, costing ``[steps] cost`` (plus ``inform`` for an inform).
+
+        Pseudo-code::
+
+            h = the pending human move; T_h = h(T); W_h = h applied to every world
+                (the inferable atoms h changed learnt, C7.1)
+            witnessed = co-present in T and (in T_h, or witness = "start")   (C8)
+            actions r (C2, C3): at T (co-present or k < K), admissible with h,
+                and seen or k < K; T' = r(T_h)                               (C6)
+            wait: unless h = pass (C3: (pass, wait) is never a step)
+            inform(A): where the human hears it (witnessed, or inform = "anywhere"), A an
+                informing set of the node after h (§5: judged on the human's next decision)
+            each child: C7 (witnessed: the worlds that anticipated r after h advance, else
+                revision; unseen: the product, k + 1), situation assessment on T', k reset
+                when co-present (C7.4)
+        """
+        t, cop0 = es.true, self.copresent(es.true)
+        hop: GOp | None = None
+        t_h, worlds_h = t, es.worlds
+        if es.pending[0] == H_ACTION:
+            hop = self.grounded.human.ops[es.pending[1]]
+            t_h = hop.apply(t)
+            inf = self.grounded.expand(t ^ t_h) & self.grounded.inferable_mask
+            worlds_h = normalize(((hop.apply(s) & ~inf) | (t_h & inf), ag)
+                                 for s, ag in es.worlds)
+        cop1 = self.copresent(t_h)
+        witnessed = cop0 and (cop1 or self.steps.witness == Witness.START)
+        c_step = self.steps.cost
+        out: list[Move] = []
+        for rop, rest in self.robot_actions(es):
+            self.check()
+            if not witnessed and es.k >= self.K:
+                continue  # unseen past K (C7.3)
+            if hop is not None and not self.admissible(es, hop, t_h, rop, rest):
+                continue
+            t2 = rop.apply(t_h)
+            out.append(Move(ROBOT, ACTION, rop.name, c_step,
+                            self.joint(es, t_h, worlds_h, t2, rest, rop, witnessed), rop.id))
+        if hop is not None:
+            out.append(Move(ROBOT, WAIT, "wait", c_step,
+                            self.joint(es, t_h, worlds_h, t_h, es.robot_agenda, None, witnessed)))
+        if witnessed or self.comm.inform == InformWhere.ANYWHERE:
+            mid = EState(HUMAN, t_h, es.robot_agenda, es.human_agendas,
+                         self.assess(t_h, worlds_h), 0 if cop1 else es.k, 0)
+            for mask in self.informing_sets(mid):
+                told = self.sees_done(t_h, es.robot_agenda,
+                                      self.assess(t_h, self.observe(t_h, mid.worlds, mask)))
+                out.append(Move(ROBOT, INFORM, self.inform_label(t_h, mask),
+                                c_step + self.costs.inform, mid._replace(worlds=told),
+                                atoms=mask))
+        return out
+
+    def joint(self, es: EState, t_h: int, worlds_h: Worlds, t2: int, rest: Agenda,
+              rop: GOp | None, witnessed: bool) -> EState:
+        """C6-C8: the decision node after the step: the robot's action ``rop`` (None: a wait)
+        seen or not, situation assessment on ``t2`` and ``k``."""
+        k = es.k
+        if witnessed:
+            if rop is None:
+                worlds = worlds_h
+            else:
+                new: list[World] = []
+                seen_op = self.anticipated_op(rop.id)
+                for s, ag in worlds_h:
+                    for _, r in self.RH.refine_to(ag, s, rop.id):
+                        new.append((seen_op.apply(s), r))
+                if not new:  # the human could not have expected it: revise (§4)
+                    told = self.attributed(rest)
+                    new = [(seen_op.apply(s), told) for s, _ in worlds_h]
+                inf = self.grounded.expand(t_h ^ t2) & self.grounded.inferable_mask
+                if inf:
+                    new = [((s & ~inf) | (t2 & inf), a) for s, a in new]
+                worlds = normalize(new)
+        elif k < self.K:  # C7.3: unseen, the human imagines what the robot may have done
+            worlds, k = self.product(worlds_h), k + 1
+        else:
+            worlds = worlds_h
+        worlds = self.sees_done(t2, rest, self.assess(t2, worlds))
+        return EState(HUMAN, t2, rest, es.human_agendas, worlds,
+                      0 if self.copresent(t2) else k, 0)
+
+
+__all__ = ["H_ACTION", "H_PASS", "ConcurrentSemantics", "check_concurrent", "semantics_for"]
