@@ -293,3 +293,26 @@ def test_the_no_policy_line_before_the_protocol_is_numbered_too(tmp_path: Path) 
     r = ehatp_cli("execute", tiny, stdin="")
     assert r.returncode == 1
     assert kinds(numbered(r.stdout)) == ["error"]
+
+
+# --- a line too long ---------------------------------------------------------------------------
+
+
+def test_a_line_longer_than_the_cap_is_a_bad_request_never_echoed_and_the_next_line_is_read(
+        ) -> None:
+    import io
+
+    from ehatp.run.execute import MAX_LINE, run
+
+    out: list[dict[str, Any]] = []
+    huge = '{"human": "' + "a" * (3 * MAX_LINE) + '"}\n'
+    code = run(p2(), io.StringIO(huge + '{"human": "pass"}\n'), out.append)
+    errors = [m for m in out if "error" in m]
+    # by hand: start, beliefs and waiting (seq 1-3), then line 1 is refused whole (seq 4);
+    # line 2 (pass, a move the policy covers at the root) is played; the input then ends
+    assert errors[0] == {"error": "bad-request", "message": f"the line is longer than "
+                         f"{MAX_LINE:,} characters; send one JSON object per line, as the "
+                         "protocol says", "line": 1, "seq": 4}
+    assert any(m.get("step", {}).get("action") == "pass" for m in out)
+    assert errors[-1]["error"] == "end-of-input" and code == 1
+    assert all(len(str(m)) < 1000 for m in out)

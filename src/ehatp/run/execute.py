@@ -410,14 +410,25 @@ def run(ex: Executor, stdin: TextIO, emit: Emit, *, replan: bool = False,
         return EXIT_BAD
     number = 0
     while session.exit is None:
-        text = stdin.readline()
+        text = stdin.readline(MAX_LINE + 1)
         if not text:
             session.emit({"error": "end-of-input", "message": "the input ended before the "
                           "goal", "line": number})
             return EXIT_STOPPED
         number += 1
+        if len(text) > MAX_LINE and not text.endswith("\n"):
+            while text and not text.endswith("\n"):  # the rest of the line, unread
+                text = stdin.readline(MAX_LINE)
+            session.error("bad-request", f"the line is longer than {MAX_LINE:,} characters; "
+                          "send one JSON object per line, as the protocol says", number)
+            continue
         session.handle(text, number)
     return session.exit
+
+
+MAX_LINE = 1 << 16
+"""The longest input line :func:`run` reads (characters, the newline included): a longer one
+is a ``bad-request``, read to its end in pieces and never held or echoed whole."""
 
 
 def replans_folder(path: Path) -> Path:
