@@ -24,7 +24,7 @@ from ehatp.run.executor import Executor
 
 from .bt_cpp.policies import chain_policy, comb_policy
 from .bt_cpp.schema import problems
-from .conftest import EXAMPLES, Example, solved_v2
+from .conftest import DATA, EXAMPLES, Example, solved_v2
 
 pytestmark = pytest.mark.slow
 ROOT = Path(__file__).resolve().parent.parent
@@ -135,6 +135,23 @@ def test_every_example_loads_and_ticks_in_behaviortree_cpp_as_in_py_trees(
     # without the problem the answers are left to the robot: the tree still loads and runs
     status, _ = run_cpp(tick, tmp_path, bt.to_btcpp(bt.from_policy(policy)), [1, 0])
     assert status == "SUCCESS"
+
+
+def test_a_policy_with_many_shared_states_loads_unfolded_and_ticks(tick: Path, tmp_path: Path
+                                                                   ) -> None:
+    """BehaviorTree.CPP builds each SubTree anew at every use: the 8-cube policy's 73 trees
+    (about 3,900 lines) load as some 177,000 nodes, and still run as the policy says."""
+    problem, policy = solved_v2(DATA / "cubes-8.toml")
+    text = bt.to_btcpp(bt.from_policy(policy, bt.answers_of(problem, policy)))
+    f = tmp_path / "cubes8.xml"
+    f.write_text(text, encoding="utf-8")
+    first = subprocess.run([str(tick), str(f)], capture_output=True, text=True, timeout=300)
+    loaded = int(first.stdout.splitlines()[0].split("\t")[1])
+    assert loaded > 10 * text.count("\n")  # the unfolding, far larger than the file
+    for choices in scripts(3):
+        status, lines = run_cpp(tick, tmp_path, text, choices)
+        assert status == "SUCCESS" and (status, lines) == run_py(policy, choices, problem)
+        assert replay(problem, policy, lines).goal_reached
 
 
 def test_the_program_registers_the_nodes_the_tree_nodes_model_declares(tick: Path) -> None:
