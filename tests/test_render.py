@@ -455,7 +455,7 @@ def big_policy(levels: int, width: int) -> Policy:
             i = first[level] + j
             goal = level == levels
             nodes.append(PolicyNode(
-                id=i, copresent=level % 3 != 2, k=level % 3, worlds=1 + i % 3, divergence=[],
+                id=i, copresent=level % 3 == 0, k=level % 3, worlds=1 + i % 3, divergence=[],
                 world_diffs=[{"true": [], "false": []}] * (1 + i % 3), state=[f"at(p{level})"],
                 robot_agenda=[], human_agenda=[] if goal else ["walk"],
                 to_move=None if goal else "H", value=levels - level, goal=goal,

@@ -30,7 +30,7 @@ from typer.exceptions import TyperException
 from .. import __version__
 from ..errors import DomainError, EhatpError, InputError, printable
 from ..formats.policy import Policy
-from ..formats.policy_check import check_policy_problem, read_policy
+from ..formats.policy_check import check_consistent, check_policy_problem, read_policy
 from ..formats.problem_toml import load
 from ..model.options import ObjectiveKind
 from ..model.problem import Problem
@@ -72,16 +72,21 @@ def load_problem(path: Path) -> Problem:
     raise AssertionError  # unreachable: user_errors exits; keeps type checkers content
 
 
-def load_policy(path: Path, problem: Path | None = None, *, counts: bool = True) -> Policy:
+def load_policy(path: Path, problem: Path | None = None, *, counts: bool = True,
+                consistent: bool = False) -> Policy:
     """The policy at ``path``, its structure checked (see
-    :func:`~ehatp.formats.policy_check.read_policy`), and with ``problem`` checked to be the
-    one it was planned for; a mistake is one line, exit 2."""
+    :func:`~ehatp.formats.policy_check.read_policy`), with ``problem`` checked to be the one
+    it was planned for, and (``consistent``) what it says checked against its own graph
+    (:func:`~ehatp.formats.policy_check.check_consistent`); a mistake is one line, exit 2."""
     with user_errors(path):
         pol = read_policy(path, counts=counts)
     if problem is not None:
         prob = load_problem(problem)
         with user_errors(path):
             check_policy_problem(pol, path, prob)
+    if consistent:
+        with user_errors(path):
+            check_consistent(pol, str(path))
     return pol
 
 

@@ -9,7 +9,7 @@ import typer
 
 from ..errors import DotMissing, printable
 from ..formats.lifted import expanded
-from ..formats.policy_check import check_policy_problem, read_policy
+from ..formats.policy_check import check_consistent, check_policy_problem, read_policy
 from ..formats.render import DEFAULT_MAX_NODES, Format, render
 from .common import command_app, die, load_problem, user_errors, write_output
 
@@ -36,19 +36,24 @@ def render_command(
 ) -> None:
     """Draw a policy as Graphviz DOT or SVG, or as a self-contained HTML explorer.
 
-    The file's structure is checked first (exit 2 if it was edited into something else).
+    The file is checked first (exit 2, one line, if it was edited into something else): its
+    structure, that what it says agrees with its own graph (values, who moves, goals, worlds,
+    the moves' text), and with --problem that it was planned for that problem. Whether every
+    move is legal is `ehatp validate`'s.
+
     Written to a file (--out), one line on stderr says what: the file, the format, the
     policy's nodes, the size, and how the drawing was collapsed, if it was."""
     with user_errors(policy):
         pol = read_policy(policy)
-    if problem is not None:
-        prob = load_problem(problem)
-        with user_errors(policy):
+    prob = None if problem is None else load_problem(problem)
+    with user_errors(policy):
+        if prob is not None:
             check_policy_problem(pol, policy, prob)
-            if pol.symmetry is not None:  # lifted: expanded with the problem's own labels
-                from ..run.expand import expand_policy
+        check_consistent(pol, str(policy))
+        if prob is not None and pol.symmetry is not None:  # lifted: the problem's own labels
+            from ..run.expand import expand_policy
 
-                pol = expand_policy(prob, pol)
+            pol = expand_policy(prob, pol)
     with user_errors(policy):
         try:
             text, notes = render(pol, fmt, max_depth=max_depth, max_nodes=max_nodes,

@@ -39,9 +39,12 @@ def show_cmd(
     other moves into it end with "-> see node N".
     Timelines: turns while the agents are together,
     parallel lanes while they are apart. Colour on a terminal, plain text in a pipe.
-    The file's structure is checked first (exit 2 if it was edited into something else).
+    The file is checked first (exit 2, one line, if it was edited into something else): its
+    structure, that what it says agrees with its own graph (values, who moves, goals, worlds,
+    the moves' text), and with --problem that it was planned for that problem. Whether every
+    move is legal is `ehatp validate`'s.
     """
-    pol = load_policy(policy, problem)
+    pol = load_policy(policy, problem, consistent=True)
     if problem is not None and pol.symmetry is not None:  # lifted: its real labels
         from ..run.expand import expand_policy
         from .common import load_problem, user_errors

@@ -2,6 +2,8 @@
 (:meth:`~ehatp.formats.policy.Policy.load`) and checks the type of every field the tools read and
 whether its counts match its graph, so that a hand-edited or truncated file is one
 :class:`~ehatp.errors.InputError` line instead of a wrong display or a crash;
+:func:`check_consistent` checks that what the file says agrees with itself (values, turns,
+goals, worlds, the moves' text), as ``show`` and ``render`` do before they display it;
 :func:`check_policy_problem` checks it was planned for a given problem."""
 
 from __future__ import annotations
@@ -191,6 +193,141 @@ def check_policy(policy: Policy, name: str, *, counts: bool = True) -> None:
                          f"says {policy.communications}, but the policy has {comms}", fix)
 
 
+EDITED_FIX = ("give the policy `ehatp solve` wrote, unedited (`ehatp validate PROBLEM POLICY` "
+              "checks every rule)")
+MOVE_KINDS = ("action", "wait", "pass", "inform", "ask", "silence", "answer", "announce")
+_NAMED_AS_KIND = ("wait", "pass", "inform", "ask")  # kinds whose move is named as the kind
+
+
+def _close(a: Any, b: Any) -> bool:
+    """Return whether two costs are equal, up to the rounding of a number JSON wrote as a
+    decimal (an expected cost such as 1/3)."""
+    x, y = Fraction(a), Fraction(b)
+    return x == y or abs(x - y) <= Fraction(1, 10**9) * max(Fraction(1), abs(y))
+
+
+def check_consistent(policy: Policy, name: str) -> None:
+    """Raise :class:`InputError` at the first thing ``policy`` says that its own graph
+    contradicts -- what a hand edit leaves behind that :func:`check_policy` does not see,
+    since each field still has the right type. Checked from the file alone, linear in its
+    size: who moves at each node (its moves are that agent's; the robot has one move); goals
+    (a node without moves is a goal, of value 0, and a goal has no moves); every node's value
+    from its moves' costs and the next nodes' values (the worst of them under the worst-case
+    objective, between the cheapest and the worst under the expected one), the header's cost,
+    worst case and expected cost from the root's; the K-counter (within K, 0 while the agents
+    are together); the worlds (as many as ``world_diffs`` lists, none contradicting the
+    node's state, ``divergence`` the literals they differ on); each move's kind, and its text
+    (``action``) beginning with its ``name``. Whether each move is legal in the problem is the
+    validator's (``ehatp validate``)."""
+    def fail(place: str, what: str) -> InputError:
+        return InputError(name, place, what + " (the file contradicts itself)", EDITED_FIX)
+
+    agents = policy.agents
+    robot = agents["robot"]
+    expected = isinstance(policy.objective, dict) and policy.objective.get("kind") == "expected"
+    uniform = not (isinstance(policy.objective, dict) and policy.objective.get("weights"))
+    worst: dict[int, Fraction] = {}
+    mean: dict[int, Fraction] = {}
+    for i in reversed(policy.topological_order()):  # children first
+        node = policy.nodes[i]
+        at = f"nodes[{i}]"
+        _check_worlds(node, at, policy.K, fail)
+        for j, m in enumerate(node.moves):
+            if m.kind not in MOVE_KINDS:
+                raise fail(f"{at}.moves[{j}].kind", f"{m.kind!r:.40} is not a kind of move "
+                           f"({', '.join(MOVE_KINDS)})")
+            if m.kind in _NAMED_AS_KIND and m.name != m.kind:
+                raise fail(f"{at}.moves[{j}].name", f"a {m.kind} move is named {m.kind}, not "
+                           f"{m.name!r:.40}")
+            if not m.action.startswith(m.name):
+                raise fail(f"{at}.moves[{j}].action", f"{m.action!r:.60} is not a move named "
+                           f"{m.name!r:.40}, as its name says")
+        if not node.moves:
+            if not node.goal:
+                raise fail(f"{at}.goal", "a node without moves ends a branch, so it is a "
+                           "goal, but goal is false")
+            if node.to_move is not None:
+                raise fail(f"{at}.to_move", f"a goal has no one to move, not "
+                           f"{node.to_move!r:.40}")
+            if not _close(node.value, 0):
+                raise fail(f"{at}.value", f"a goal's cost to go is 0, not {node.value}")
+            worst[i] = mean[i] = Fraction(0)
+            continue
+        if node.goal:
+            raise fail(f"{at}.goal", f"a goal ends its branch, but the node has "
+                       f"{len(node.moves)} move(s)")
+        movers = {m.agent for m in node.moves}
+        if movers != {node.to_move}:
+            raise fail(f"{at}.to_move", f"says {node.to_move!r:.40} moves, but the moves are "
+                       f"{' and '.join(sorted(movers))}'s")
+        if node.to_move == robot and len(node.moves) != 1:
+            raise fail(f"{at}.moves", f"the robot ({robot}) moves here and a policy chooses "
+                       f"one move for it, not {len(node.moves)}")
+        costs = [Fraction(m.cost) + worst[m.to] for m in node.moves]
+        means = [Fraction(m.cost) + mean[m.to] for m in node.moves]
+        worst[i] = max(costs)
+        mean[i] = sum(means, Fraction(0)) / len(means)
+        low = min(Fraction(m.cost) + Fraction(policy.nodes[m.to].value) for m in node.moves)
+        high = max(Fraction(m.cost) + Fraction(policy.nodes[m.to].value) for m in node.moves)
+        if not expected and not _close(node.value, high):
+            raise fail(f"{at}.value", f"is {node.value}, but its worst move costs {_n(high)} "
+                       "to the goal (move cost plus the next node's value)")
+        if expected and uniform and not _close(node.value, mean[i]):
+            raise fail(f"{at}.value", f"is {node.value}, but its moves' mean cost to the goal "
+                       f"is {_n(mean[i])} (move cost plus the next node's value)")
+        if expected and not (low <= Fraction(node.value) <= high or _close(node.value, low)
+                             or _close(node.value, high)):
+            raise fail(f"{at}.value", f"is {node.value}, outside what its moves cost to the "
+                       f"goal ({_n(low)} to {_n(high)})")
+    if not _close(policy.cost, policy.root.value):
+        raise fail("cost", f"says {policy.cost}, but the root's value is {policy.root.value}")
+    if policy.worst_case is not None and not _close(policy.worst_case, worst[0]):
+        raise fail("worst_case", f"says {policy.worst_case}, but the policy's worst branch "
+                   f"costs {_n(worst[0])}")
+    if policy.expected is not None and uniform and not _close(policy.expected, mean[0]):
+        raise fail("expected", f"says {policy.expected}, but the policy's expected cost is "
+                   f"{_n(mean[0])}")
+
+
+def _n(x: Fraction) -> str:
+    """Return a cost as the file writes it: a whole number, or a decimal."""
+    return str(x.numerator) if x.denominator == 1 else f"{float(x):g}"
+
+
+def _check_worlds(node: Any, at: str, K: int,
+                  fail: Callable[[str, str], InputError]) -> None:
+    """What a node says of the K-counter and the worlds agrees with itself (see
+    :func:`check_consistent`)."""
+    if node.k > K:
+        raise fail(f"{at}.k", f"{node.k} robot turns unseen is over the bound K = {K}")
+    if node.copresent and node.k != 0:
+        raise fail(f"{at}.k", f"is {node.k}, but the agents are together, where the counter "
+                   "is 0")
+    if node.worlds != len(node.world_diffs):
+        raise fail(f"{at}.worlds", f"says {node.worlds}, but world_diffs lists "
+                   f"{len(node.world_diffs)}")
+    state = set(node.state)
+    differ: set[str] = set()
+    for j, d in enumerate(node.world_diffs):
+        if not isinstance(d, dict) or not all(
+                isinstance(d.get(k), list) and all(isinstance(a, str) for a in d[k])
+                for k in ("true", "false")):
+            raise fail(f"{at}.world_diffs[{j}]", "must be an object with lists true and false")
+        for a in d["true"]:
+            if a in state:
+                raise fail(f"{at}.world_diffs[{j}].true", f"{a!r:.60} is listed as true unlike "
+                           "the truth, but the node's state holds it")
+            differ.add(f"not {a}")
+        for a in d["false"]:
+            if a not in state:
+                raise fail(f"{at}.world_diffs[{j}].false", f"{a!r:.60} is listed as false "
+                           "unlike the truth, but the node's state does not hold it")
+            differ.add(a)
+    if differ != set(node.divergence):
+        raise fail(f"{at}.divergence", "is not the literals on which the worlds differ from "
+                   f"the truth ({', '.join(sorted(differ)) or 'none'})")
+
+
 def check_policy_problem(policy: Policy, policy_path: Path | str, problem: Problem) -> None:
     """Raise :class:`InputError` unless ``policy`` was planned for ``problem`` (same problem
     name, domain, agents and K)."""
@@ -206,4 +343,5 @@ def check_policy_problem(policy: Policy, policy_path: Path | str, problem: Probl
                              f"{problem.source} --out {policy_path})")
 
 
-__all__ = ["SCHEMA", "check_policy", "check_policy_problem", "check_schema", "read_policy"]
+__all__ = ["EDITED_FIX", "MOVE_KINDS", "SCHEMA", "check_consistent", "check_policy",
+           "check_policy_problem", "check_schema", "read_policy"]
