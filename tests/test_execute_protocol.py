@@ -10,6 +10,7 @@ node 17). Its physical alternatives there are place(r, box1) and place(r, box2).
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Any
 
@@ -316,3 +317,26 @@ def test_a_line_longer_than_the_cap_is_a_bad_request_never_echoed_and_the_next_l
     assert any(m.get("step", {}).get("action") == "pass" for m in out)
     assert errors[-1]["error"] == "end-of-input" and code == 1
     assert all(len(str(m)) < 1000 for m in out)
+
+
+def test_each_replan_gets_the_limits_execute_was_given(monkeypatch: pytest.MonkeyPatch) -> None:
+    import io
+
+    from ehatp.errors import ExecutionError
+    from ehatp.run.execute import run
+
+    ex = p2()
+    asked: list[dict[str, Any]] = []
+
+    def replan(*args: Any, **options: Any) -> Any:
+        asked.append(options)
+        raise ExecutionError("no policy: time limit of 0.5 s reached")
+
+    monkeypatch.setattr(ex, "replan", replan)
+    out: list[dict[str, Any]] = []
+    lines = "".join(json.dumps(m) + "\n" for m in TO_PLACE)
+    code = run(ex, io.StringIO(lines + '{"robot_failed": "place(r, box1)"}\n'), out.append,
+               timeout=0.5, max_memory=1 << 30)
+    assert asked == [{"timeout": 0.5, "max_memory": 1 << 30}]
+    assert out[-1]["error"] == "no-policy" and "time limit of 0.5 s" in out[-1]["message"]
+    assert code == 1

@@ -8,6 +8,7 @@ turns out not to fit the problem (a ``policy-mismatch`` line); 3 internal error.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import re
 import sys
@@ -18,9 +19,10 @@ import typer
 
 from ..errors import ExecutionError, InputError, PolicyMismatch
 from ..formats.policy_check import read_policy
+from ..model.problem import parse_size
 from ..run.execute import EXIT_STOPPED, Emit, replans_folder, run
 from ..run.executor import Executor
-from .common import command_app, load_problem, user_errors
+from .common import command_app, die, load_problem, user_errors
 
 app = command_app()
 
@@ -53,6 +55,13 @@ def execute_cmd(
     save_replans: Path | None = typer.Option(
         None, "--save-replans", metavar="DIR", help="Write each replanned policy to "
         "DIR/replan-N.json (its `after` is the execution so far).", show_default=False),
+    timeout: float | None = typer.Option(
+        None, "--timeout", min=0.1, help="Seconds each planning may take (the first, without "
+        "--policy, and every replan; default: the problem's limits.timeout).",
+        show_default=False),
+    max_memory: str | None = typer.Option(
+        None, "--max-memory", help="Resident memory each planning may use, e.g. 2G (default: "
+        "the problem's limits.max_memory).", show_default=False),
 ) -> None:
     """Execute a policy live: JSON lines on stdin (what the human did, what the robot
     finished) and on stdout (what the robot should do, what the human believes, the goal,
@@ -60,7 +69,18 @@ def execute_cmd(
 
     Exit code 0: goal reached; 1: the input ended first, or no policy after replanning;
     2: bad problem or policy."""
+    memory: int | None = None
+    if max_memory is not None:
+        try:
+            memory = parse_size(max_memory)
+        except ValueError as e:
+            die(f"--max-memory {max_memory}: {e}; write e.g. 2G, 512M or a number of bytes")
     prob = load_problem(problem)
+    if timeout is not None or memory is not None:  # the first planning too (no --policy)
+        limits = dataclasses.replace(
+            prob.limits, timeout=prob.limits.timeout if timeout is None else timeout,
+            max_memory=prob.limits.max_memory if memory is None else memory)
+        prob = dataclasses.replace(prob, limits=limits)
     pol = None
     if policy is not None:
         with user_errors(policy):
@@ -81,5 +101,5 @@ def execute_cmd(
             replans_folder(save_replans)  # created, with its parents, if missing
     code = run(ex, sys.stdin, safe_json_lines(sys.stdout), replan=replan,
                source=str(policy) if policy is not None else "solved now",
-               save=save_replans)
+               save=save_replans, timeout=timeout, max_memory=memory)
     raise typer.Exit(code)

@@ -76,8 +76,11 @@ class Session:
     """One execution driven by JSON lines; :meth:`handle` answers one input line."""
 
     def __init__(self, ex: Executor, emit: Emit, *, replan: bool,
-                 save: Path | None = None) -> None:
+                 save: Path | None = None, timeout: float | None = None,
+                 max_memory: int | None = None) -> None:
         self.ex, self.out, self.replan, self.save = ex, emit, replan, save
+        # each replan's limits (None: the problem's [limits])
+        self.limits: dict[str, Any] = {"timeout": timeout, "max_memory": max_memory}
         self.exit: int | None = None  # set when the session is over
         self.replans = 0
         self.seq = 0  # output lines so far
@@ -220,7 +223,7 @@ class Session:
     def replan_after(self, label: str, line: int) -> None:
         ex = self.ex
         try:
-            result = ex.replan(label)
+            result = ex.replan(label, **self.limits)
         except UncoveredHumanAction as e:
             self.error("uncovered", str(e), line, action=e.action, expected=e.expected,
                        possible=e.possible)
@@ -355,7 +358,7 @@ class Session:
         """The robot's action did not happen: plan again from the same state."""
         ex = self.ex
         try:
-            result = ex.replan()
+            result = ex.replan(**self.limits)
         except PolicyMismatch:
             raise
         except ExecutionError as e:
@@ -399,10 +402,14 @@ class Session:
 
 
 def run(ex: Executor, stdin: TextIO, emit: Emit, *, replan: bool = False,
-        source: str = "solved now", save: Path | None = None) -> int:
+        source: str = "solved now", save: Path | None = None, timeout: float | None = None,
+        max_memory: int | None = None) -> int:
     """The protocol without the CLI: read ``stdin`` to the goal or its end; returns the exit
-    code. ``save``: a folder where each replanned policy is written (``replan-N.json``)."""
-    session = Session(ex, emit, replan=replan, save=save)
+    code. ``save``: a folder where each replanned policy is written (``replan-N.json``);
+    ``timeout`` (seconds) and ``max_memory`` (bytes): each replan's limits (None: the
+    problem's)."""
+    session = Session(ex, emit, replan=replan, save=save, timeout=timeout,
+                      max_memory=max_memory)
     try:
         session.start(source)
     except PolicyMismatch as e:
