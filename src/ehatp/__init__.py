@@ -39,6 +39,7 @@ from .model.domain import (
 from .model.formula import FALSE, TRUE, Var, eq, exists, forall
 from .model.options import (
     Communication,
+    Commute,
     HumanModel,
     InformWhere,
     Objective,
@@ -46,6 +47,10 @@ from .model.options import (
     Passes,
     Relevance,
     Speech,
+    StepFirst,
+    StepMode,
+    Steps,
+    Witness,
 )
 from .model.problem import BeliefWorld, Costs, Limits, Problem
 
@@ -119,7 +124,7 @@ def __getattr__(name: str) -> object:
 
 __all__ = [
     "Communication", "HumanModel", "InformWhere", "Objective", "ObjectiveKind", "Passes",
-    "Relevance", "Speech",
+    "Relevance", "Speech", "Steps", "StepMode", "StepFirst", "Witness", "Commute",
     "FALSE", "HIDDEN", "INFERABLE", "TRUE", "AgentModel", "BeliefWorld", "Costs", "Domain",
     "DomainError", "EhatpError", "ExecutionError", "Executor", "InputError", "Limits",
     "Policy", "PolicyMismatch", "Problem", "Result", "UncoveredHumanAction", "Var", "eq", "exists",

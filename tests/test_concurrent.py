@@ -1,0 +1,353 @@
+"""Joint, compliant steps (docs/concurrent.md; the specification's rules C1-C12 and its worked
+examples E1-E3): every figure below was derived by hand from the rules before the planner was
+run, and the derivation is in each test's docstring."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import pytest
+
+import ehatp
+from ehatp import (
+    INFERABLE,
+    Communication,
+    Domain,
+    DomainError,
+    Executor,
+    InputError,
+    Problem,
+    StepMode,
+    Steps,
+    Var,
+    Witness,
+)
+from ehatp.formats.policy import Policy
+from ehatp.run.walk import walk_policy
+
+from .conftest import EXAMPLES_DIR as EXAMPLES
+
+JOINT = Steps(StepMode.CONCURRENT)
+
+
+def solved(p: Problem) -> Policy:
+    """Return ``p``'s policy, checked by the validator and walked through the Executor."""
+    r = ehatp.solve(p)
+    assert r.policy is not None, r.reason
+    report = ehatp.validate(p, r.policy)
+    assert report.ok, report.message
+    walked = walk_policy(p, r.policy)
+    assert walked.ok, str(walked)
+    return r.policy
+
+
+def replies(policy: Policy) -> dict[tuple[str, ...], str]:
+    """Return the robot's reply after each line of human decisions (labels), over the
+    policy's branches: what the compliant robot does for each human move."""
+    out: dict[tuple[str, ...], str] = {}
+    for branch in policy.iter_branches():
+        humans: list[str] = []
+        for step in branch[1:]:
+            assert step.move is not None
+            if step.move.step == "reply":
+                out[tuple(humans)] = step.move.action
+            elif step.move.step in ("human", "ask"):
+                humans.append(step.move.action)
+    return out
+
+
+# --- E1: two independent chores -------------------------------------------------------------
+
+def chores(steps: Steps) -> Problem:
+    """E1: always co-present; the robot puts ``a``, the human puts ``b``; no common
+    resource."""
+    d = Domain("chores", robot="R", human="H")
+    x = Var("x", d.type("thing"))
+    placed = d.predicate("placed", x)
+    for m in (d.robot, d.human):
+        m.action("put", x, pre=~placed(x), effects=[placed(x)])
+    return Problem(name="e1", domain=d, objects={"thing": ["a", "b"]}, init=frozenset(),
+                   robot_agenda=(("put", ("a",)),), human_agenda=(("put", ("b",)),),
+                   starts="robot", steps=steps)
+
+
+def test_e1_two_independent_chores_take_two_steps_and_four_turns() -> None:
+    """E1 by hand. Concurrent, the human first (C4). Root: the human may ``put(b)``, or pass
+    (C5: co-present and the robot has a real action, ``put(a)``).
+    - ``put(b)``: the robot's replies are ``put(a)`` (C3: still an option after ``put(b)``,
+      ``put(b)`` still applicable after it, the same state either way, no resource) and
+      ``wait``; ``put(a)`` reaches the goal: 1 step.
+    - ``pass``: (pass, wait) is never a step (C3), so the robot puts ``a``: 1 step; then the
+      robot has nothing to do, so the human may not pass (C5) and puts ``b`` while the robot
+      waits: 1 step. 2 steps.
+    Worst case 2 (the makespan, C11), no communication, and the robot does ``put(a)``
+    whatever the human does. Turn-taking, the robot first, fair passes (§4): ``put(a)``, H
+    passes, R waits (forced), H ``put(b)``: 4 moves."""
+    policy = solved(chores(JOINT))
+    assert (policy.cost, policy.communications) == (2, 0)
+    assert replies(policy) == {("put(b)",): "put(a)", ("pass",): "put(a)",
+                               ("pass", "put(b)"): "wait"}
+    assert solved(chores(Steps())).cost == 4
+
+
+# --- E2: one cube, two hands ----------------------------------------------------------------
+
+def two_hands(steps: Steps) -> Problem:
+    """E2: cube ``c`` within reach of both; each agent's task is to have it placed (done once
+    it is); ``pick`` and ``place`` hold the cube (C3 c)."""
+    d = Domain("two-hands", robot="R", human="H")
+    c = Var("c", d.type("cube"))
+    ontable, placed = d.predicate("ontable", c), d.predicate("placed", c)
+    holding = d.predicate("holding", Var("a", "agent"), c)
+    for m, who in ((d.robot, "R"), (d.human, "H")):
+        pick = m.action("pick", c, pre=ontable(c), effects=[~ontable(c), holding(who, c)],
+                        resources=[c])
+        place = m.action("place", c, pre=holding(who, c),
+                         effects=[~holding(who, c), placed(c)], resources=[c])
+        stack = m.task("stack", c, done=placed(c))
+        m.method(stack, "pick_place", pre=ontable(c), subtasks=[pick(c), place(c)])
+        m.method(stack, "place", pre=holding(who, c), subtasks=[place(c)])
+    return Problem(name="e2", domain=d, objects={"cube": ["c"]},
+                   init=frozenset({("ontable", ("c",))}), robot_agenda=(("stack", ("c",)),),
+                   human_agenda=(("stack", ("c",)),), steps=steps)
+
+
+def test_e2_the_robot_yields_the_cube_the_human_reaches_for() -> None:
+    """E2 by hand. Root: the human may ``pick(c)``, or pass (the robot can pick).
+    - ``pick(c)``: the robot's ``pick(c)`` is no reply (C3 a: not applicable after the human's
+      pick; C3 c: both hold ``c``), so it waits: 1 step. Then the robot is blocked (the cube
+      is held), so the human may not pass and places it, the robot waiting: 2 steps.
+    - ``pass``: the robot must act (no (pass, wait)): it picks: 1 step; the human, blocked,
+      passes (the robot can place) and the robot places: 2 steps.
+    Worst case 2; compliant replies: pick -> wait, pass -> pick. Turn-taking (§4, the human
+    first): H pass, R pick, H pass, R place: 4 moves."""
+    policy = solved(two_hands(JOINT))
+    assert (policy.cost, policy.communications) == (2, 0)
+    assert replies(policy) == {("pick(c)",): "wait", ("pick(c)", "place(c)"): "wait",
+                               ("pass",): "pick(c)", ("pass", "pass"): "place(c)"}
+    assert solved(two_hands(Steps())).cost == 4
+
+
+def test_a_shared_resource_alone_keeps_two_actions_apart() -> None:
+    """C3 c: the human wipes the table while the robot picks the cube from it. Both orders
+    reach the same state, so only the declared resource (the table) keeps the robot from
+    picking during the wipe: with it, the robot's reply to ``wipe`` is ``wait`` and that
+    branch takes 2 steps (then the human, done, passes while the robot picks); without it,
+    the robot picks at once: 1 step. The worst case is 2 either way: the human may pass first
+    (the robot can pick), then wipe."""
+    def problem(resources: bool) -> Problem:
+        d = Domain("wipe", robot="R", human="H")
+        c = Var("c", d.type("cube"))
+        t = d.constant("table", d.type("surface"))
+        ontable, held = d.predicate("ontable", c), d.predicate("held", c)
+        wiped = d.predicate("wiped")
+        d.robot.action("pick", c, pre=ontable(c), effects=[~ontable(c), held(c)],
+                       resources=[c, t] if resources else [c])
+        d.human.action("wipe", pre=~wiped(), effects=[wiped()],
+                       resources=[t] if resources else [])
+        return Problem(name="wipe", domain=d, objects={"cube": ["c"]},
+                       init=frozenset({("ontable", ("c",))}), robot_agenda=(("pick", ("c",)),),
+                       human_agenda=(("wipe", ()),), steps=JOINT)
+
+    def wipe_first(policy: Policy) -> int:
+        branch = next(b for b in policy.iter_branches()
+                      if b[1].move is not None and b[1].move.action == "wipe")
+        return sum(s.move.cost for s in branch[1:] if s.move is not None)
+
+    held_apart = solved(problem(True))
+    assert replies(held_apart)[("wipe",)] == "wait" and wipe_first(held_apart) == 2
+    together = solved(problem(False))
+    assert replies(together)[("wipe",)] == "pick(c)" and wipe_first(together) == 1
+    assert held_apart.cost == together.cost == 2
+
+
+# --- E3: leaving during a step --------------------------------------------------------------
+
+def drawer(steps: Steps, ask: bool = True) -> Problem:
+    """E3: co-present iff the human is in the room; ``c`` in an opaque drawer (where it is is
+    inferable: learnt only by seeing it moved); K = 1. The robot moves ``c`` to the box; the
+    human goes to the pantry, comes back and takes ``c`` from the box."""
+    d = Domain("drawer", robot="R", human="H")
+    x = Var("x", d.type("thing"))
+    here = d.predicate("h_in_room")
+    in_drawer = d.predicate("in_drawer", x, observability=INFERABLE)
+    in_box = d.predicate("in_box", x, observability=INFERABLE)
+    held = d.predicate("held", x)
+    d.copresence = here()
+    d.robot.action("move", x, pre=in_drawer(x), effects=[~in_drawer(x), in_box(x)])
+    d.human.action("leave", pre=here(), effects=[~here()])
+    d.human.action("back", pre=~here(), effects=[here()])
+    d.human.action("take", x, pre=in_box(x) & here(), effects=[~in_box(x), held(x)])
+    return Problem(name="e3", domain=d, objects={"thing": ["c"]},
+                   init=frozenset({("h_in_room", ()), ("in_drawer", ("c",))}),
+                   robot_agenda=(("move", ("c",)),),
+                   human_agenda=(("leave", ()), ("back", ()), ("take", ("c",))), K=1,
+                   steps=steps, communication=Communication(ask=ask))
+
+
+def test_e3_the_robot_holds_its_move_while_the_human_leaves() -> None:
+    """E3 by hand, as the specification tells it: a human who cannot ask (``[communication]
+    ask = false``), witness "whole". Root: ``leave``, or pass (the robot can move).
+    - ``pass``: the robot moves, seen (C8); then leave, back, take, the robot waiting (it is
+      done, so the human may not pass): 4 steps.
+    - ``leave``: the human is gone by the step's end, so nothing the robot does is seen (C8).
+      Moving now: the human imagines the move (C7.3: W = {drawer, box}, k = 1); back (k = K:
+      the robot only waits); take is uncertain and it cannot ask, so it passes, and the robot,
+      done, must inform: (pass, inform(in_box(c))), then take: 4 steps, 1 communication,
+      cost 5. Holding: W is {drawer, box} too (an unseen wait is an imagined event), back,
+      then the human passes and sees the robot move (C7.2 keeps the drawer world, advanced),
+      then takes: 4 steps, 0 communications, cost 4. The robot holds.
+    Worst case 4 steps, 0 communications, as the specification says. With witness "start"
+    the move at once is seen (the human was there when the step began): the leave branch
+    takes 3 steps (leave+move, back, take), the worst case is still 4."""
+    policy = solved(drawer(JOINT, ask=False))
+    assert (policy.cost, policy.communications) == (4, 0)
+    assert replies(policy)[("leave",)] == "wait"
+    assert replies(policy)[("pass",)] == "move(c)"
+    start = solved(drawer(dataclasses.replace(JOINT, witness=Witness.START), ask=False))
+    assert (start.cost, start.communications) == (4, 0)
+    assert replies(start)[("leave",)] == "move(c)"
+    leave = next(b for b in start.iter_branches() if b[1].move and b[1].move.action == "leave")
+    assert sum(s.move.cost for s in leave[1:] if s.move is not None) == 3
+
+
+def test_e3_with_a_human_who_asks_the_robot_moves_at_once() -> None:
+    """E3 with the default human, who may ask (where the specification's figure does not
+    hold). Holding now costs more: back in the room, uncertain whether the cube was moved
+    (the unseen wait was an imagined move, C7.3), the human may ask ``in_box(c)`` (an AND
+    branch, a whole step costing 1 + 1, C3, C11); told "no", it waits for the robot's move
+    and takes: 1 (leave) + 1 (back) + 2 (ask) + 1 (pass, move) + 1 (take) = 6. Moving at
+    once: back, the robot done and the human able to ask, it may not pass (C5), so it asks
+    and takes: 1 + 1 + 2 + 1 = 5. The robot moves at once; worst case 5 (the leave branch),
+    one communication (the human's question); staying, 4 as before. The turn-taking worst
+    case (§4, fair passes) is 9 moves: H pass, R move, H pass, R wait (forced), H leave,
+    R wait, H back, R wait, H take (the specification's 6 leaves out the human's passes)."""
+    policy = solved(drawer(JOINT))
+    assert (policy.cost, policy.communications) == (5, 1)
+    assert replies(policy)[("leave",)] == "move(c)"
+    assert solved(drawer(Steps())).cost == 9
+    assert solved(drawer(Steps(), ask=False)).cost == 9
+
+
+# --- the options ----------------------------------------------------------------------------
+
+P2 = EXAMPLES / "cubes" / "p2.toml"
+
+
+def load_with(tmp_path: Path, extra: str) -> Problem:
+    """Return examples/cubes/p2.toml with ``extra`` appended, loaded from ``tmp_path``."""
+    f = tmp_path / "p.toml"
+    f.write_text(P2.read_text(encoding="utf-8") + "\n" + extra, encoding="utf-8")
+    return ehatp.load(f)
+
+
+def test_the_steps_table_reads_each_option(tmp_path: Path) -> None:
+    """``[steps]`` gives mode, first, witness, commute and the step's cost; without it the
+    agents take turns."""
+    p = load_with(tmp_path, '[steps]\nmode = "concurrent"\nwitness = "start"\n'
+                            'commute = "label"\ncost = 2\n')
+    assert (p.steps.mode, p.steps.witness, p.steps.commute, p.steps.cost) == (
+        "concurrent", "start", "label", 2)
+    assert not ehatp.load(P2).steps.concurrent
+
+
+@pytest.mark.parametrize(("extra", "says"), [
+    ('[steps]\nmode = "parallel"\n', 'unknown value'),
+    ('[steps]\nmode = "concurrent"\nwitness = "end"\n', 'unknown value'),
+    ('[steps]\ncost = 0\n', 'positive number'),
+    ('[steps]\nmodes = "concurrent"\n', 'modes'),
+    ('[steps]\nmode = "concurrent"\n[communication]\nspeech = "with-action"\n',
+     'not supported'),
+])
+def test_a_bad_steps_option_is_one_line_naming_the_place(tmp_path: Path, extra: str,
+                                                         says: str) -> None:
+    """Bad values are one line, ``file:line: place: problem; fix`` (exit 2 from the CLI)."""
+    with pytest.raises(InputError) as e:
+        load_with(tmp_path, extra)
+    line = str(e.value)
+    assert "\n" not in line and says in line and line.startswith(str(tmp_path / "p.toml"))
+
+
+def test_a_resource_must_be_a_parameter_or_a_name() -> None:
+    """C3 c: an action's resources are its parameters or names; another variable is a
+    mistake in the domain."""
+    d = Domain("bad", robot="R", human="H")
+    x, y = Var("x", d.type("thing")), Var("y", "thing")
+    with pytest.raises(DomainError, match="resource"):
+        d.robot.action("grab", x, resources=[y])
+
+
+def test_the_robot_deciding_first_is_refused_until_built() -> None:
+    """C4 ``first = "robot"`` is not built yet: solving says so in one line."""
+    from ehatp import StepFirst
+
+    with pytest.raises(InputError, match="first"):
+        ehatp.solve(chores(Steps(StepMode.CONCURRENT, first=StepFirst.ROBOT)))
+
+
+# --- the validator and the executor ---------------------------------------------------------
+
+def test_the_validator_refuses_a_reply_that_grabs_the_cube_the_human_holds() -> None:
+    """C3: in E2 the policy's reply to the human's ``pick(c)`` changed from ``wait`` to
+    ``pick(c)`` is not admissible, and the validator says which rule."""
+    p = two_hands(JOINT)
+    policy = solved(p)
+    root = policy.nodes[0]
+    reply_node = policy.nodes[next(m.to for m in root.moves if m.action == "pick(c)")]
+    move = reply_node.moves[0]
+    assert move.action == "wait"
+    reply_node.moves[0] = dataclasses.replace(move, action="pick(c)", kind="action",
+                                              name="pick", args=["c"])
+    report = ehatp.validate(p, policy)
+    assert not report.ok and "C3" in report.message
+
+
+def test_the_validator_wants_each_move_to_say_its_part_of_the_step() -> None:
+    """docs/policy-format.md: a joint policy's moves record ``step``; a missing one is a
+    violation."""
+    p = chores(JOINT)
+    policy = solved(p)
+    policy.nodes[0].moves[0] = dataclasses.replace(policy.nodes[0].moves[0], step="")
+    report = ehatp.validate(p, policy)
+    assert not report.ok and "step is ''" in report.message
+
+
+def test_the_executor_observes_the_human_then_gives_the_compliant_reply() -> None:
+    """C4, C9: the executor takes the human's move at the start of a step, then says the
+    robot's reply; the policy file round-trips with its steps."""
+    p = two_hands(JOINT)
+    policy = Policy.from_dict(solved(p).to_dict())
+    ex = Executor(p, policy)
+    assert ex.next_robot_action() is None
+    ex.observe_human_action("pick(c)")
+    reply = ex.next_robot_action()
+    assert reply is not None and reply.label == "wait"
+    ex.robot_action_done()
+    ex.observe_human_action("place(c)")
+    ex.robot_action_done()
+    assert ex.goal_reached
+    assert policy.step_options == {"mode": "concurrent", "first": "human",
+                                   "witness": "whole", "commute": "state", "cost": 1}
+
+
+def test_turns_stay_the_default_and_write_no_steps() -> None:
+    """In turn-taking the policy file has neither ``steps`` nor a move's ``step``."""
+    text = solved(chores(Steps())).to_json()
+    assert '"steps"' not in text and '"step"' not in text
+
+
+# --- Table 1 in joint steps -----------------------------------------------------------------
+
+TABLE1 = ["cubes/p1", "cubes/p2", "cubes/p3", "cubes/p4", "cubes/p5", "cubes/p6",
+          "cooking/cooking1", "cooking/cooking2", "cooking/cooking3"]
+
+
+@pytest.mark.parametrize("name", TABLE1)
+def test_table1_in_joint_steps_is_never_slower_than_in_turns(name: str) -> None:
+    """Issue 20: each of Table 1's instances solves and validates in joint steps, every
+    branch runs through the Executor, and its makespan is at most the turn-taking worst case
+    (a turn is a step in which the other agent waits, C12)."""
+    p = ehatp.load(EXAMPLES / f"{name}.toml")
+    joint = solved(dataclasses.replace(p, steps=JOINT))
+    assert joint.cost <= ehatp.solve(p).stats["cost"]
