@@ -10,7 +10,7 @@ import typer
 from ..errors import DotMissing, printable
 from ..formats.lifted import expanded
 from ..formats.policy_check import check_consistent, check_policy_problem, read_policy
-from ..formats.render import DEFAULT_MAX_NODES, Format, render
+from ..formats.render import DEFAULT_MAX_NODES, Format, render, static_facts
 from .common import command_app, die, load_problem, user_errors, write_output
 
 app = command_app()
@@ -32,7 +32,8 @@ def render_command(
                                            "[default: only when over --max-nodes]."),
     problem: Path | None = typer.Option(None, "--problem", "-p", metavar="PROBLEM.toml",
                                         help="Check that the policy was planned for this "
-                                             "problem file."),
+                                             "problem file; label moves as on its objects, and "
+                                             "list its static facts in the explorer."),
 ) -> None:
     """Draw a policy as Graphviz DOT or SVG, or as a self-contained HTML explorer.
 
@@ -56,8 +57,9 @@ def render_command(
             pol = expand_policy(prob, pol)
     with user_errors(policy):
         try:
+            static = static_facts(prob) if prob is not None and fmt is Format.html else None
             text, notes = render(pol, fmt, max_depth=max_depth, max_nodes=max_nodes,
-                                 share=share)
+                                 share=share, static=static)
         except DotMissing as e:
             die(str(e))
     if notes and out is None:

@@ -32,12 +32,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import DotMissing, printable
+from ..model.problem import call_str
 from .lifted import expanded
 from .policy import COMM_KINDS, Policy, PolicyMove, PolicyNode
 from .policy_check import read_policy
 
 if TYPE_CHECKING:
     import graphviz  # type: ignore[import-untyped]
+
+    from ..model.problem import Problem
 
 DEFAULT_MAX_NODES = 400  # more than this and a drawing stops being readable
 IDLE_KINDS = ("wait", "pass")
@@ -325,12 +328,14 @@ def _script_json(data: Any) -> str:
 
 
 def to_html(policy: Policy, *, max_depth: int | None = None,
-            max_nodes: int | None = DEFAULT_MAX_NODES) -> str:
-    """The self-contained explorer page; depth cap and budget only set what starts folded. A
-    lifted policy (format version 3) is drawn expanded (:func:`~ehatp.formats.lifted.expanded`)."""
+            max_nodes: int | None = DEFAULT_MAX_NODES, static: list[str] | None = None) -> str:
+    """Return the self-contained explorer page; depth cap and budget only set what starts
+    folded; ``static`` (:func:`static_facts`) are listed with the truth of every node, marked
+    static. A lifted policy (format version 3) is drawn expanded
+    (:func:`~ehatp.formats.lifted.expanded`)."""
     policy = expanded(policy)
     data = policy.to_dict()
-    config = {"maxDepth": max_depth, "maxNodes": max_nodes}
+    config = {"maxDepth": max_depth, "maxNodes": max_nodes, "staticFacts": static or []}
     parts = {
         # entities for ":" and "/" keep a URL-like problem name from reading as a link
         "title": html_escape(f"{policy.problem} — ehatp policy").replace(":", "&#58;")
@@ -348,17 +353,30 @@ def to_html(policy: Policy, *, max_depth: int | None = None,
 
 
 def render(path: str | Path | Policy, fmt: Format = Format.dot, *, max_depth: int | None = None,
-           max_nodes: int | None = DEFAULT_MAX_NODES,
-           share: bool | None = None) -> tuple[str, list[str]]:
-    """The rendered text and the collapse notes (empty when drawn whole). A path is read
-    with its structure checked (:func:`~ehatp.formats.policy_check.read_policy`); a lifted
-    policy (format version 3) is drawn expanded (:func:`~ehatp.formats.lifted.expanded`)."""
+           max_nodes: int | None = DEFAULT_MAX_NODES, share: bool | None = None,
+           static: list[str] | None = None) -> tuple[str, list[str]]:
+    """Return the rendered text and the collapse notes (empty when drawn whole). A path is
+    read with its structure checked (:func:`~ehatp.formats.policy_check.read_policy`); a
+    lifted policy (format version 3) is drawn expanded
+    (:func:`~ehatp.formats.lifted.expanded`). ``static``: the explorer's static facts
+    (:func:`to_html`)."""
     policy = expanded(path if isinstance(path, Policy) else read_policy(path))
     if fmt is Format.html:
-        return to_html(policy, max_depth=max_depth, max_nodes=max_nodes), []
+        return to_html(policy, max_depth=max_depth, max_nodes=max_nodes, static=static), []
     view = plan_view(policy, max_depth=max_depth, max_nodes=max_nodes, share=share)
     dot = to_dot(policy, view)
     return (dot.source if fmt is Format.dot else to_svg(dot)), view.notes
+
+
+def static_facts(problem: Problem) -> list[str]:
+    """Return the facts of the problem's ``[init]`` that no action and no belief world changes
+    (docs/semantics.md §2): true in every state and every world, so a policy file, which
+    records only what can change, does not hold them. Sorted, written as in ``[init]``."""
+    from ..model.grounding import ground_problem
+
+    fluent = ground_problem(problem).atom_index
+    return sorted(call_str(name, args) for name, args in problem.init
+                  if call_str(name, args) not in fluent)
 
 
 # --------------------------------------------------------------------------- notebooks
@@ -387,4 +405,4 @@ class Explorer:
 
 __all__ = ["DEFAULT_MAX_NODES", "INSTALL_DOT", "DotMissing", "Explorer", "Format", "View",
            "entry_move", "k_text", "node_attrs", "notebook_html", "plan_view", "render",
-           "subgraph_hashes", "to_dot", "to_html", "to_svg", "worlds_text"]
+           "static_facts", "subgraph_hashes", "to_dot", "to_html", "to_svg", "worlds_text"]

@@ -12,6 +12,7 @@
   const HUMAN = policy.agents.human;
   const COMM = new Set(["inform", "ask"]);
   const IDLE = new Set(["wait", "pass"]);
+  const STATIC = config.staticFacts || []; // given with the problem (render --problem)
 
   // box size and grid step of the tree drawing (SVG user units); the drawing opens at a scale
   // of at least MIN_SCALE screen pixels per unit, so the smallest text (11 units) reads >= 11 px
@@ -38,6 +39,44 @@
     const moves = nodes[x.node].moves;
     for (let j = moves.length - 1; j >= 0; j--) {
       stack.push({ node: moves[j].to, move: moves[j], parent: idx });
+    }
+  }
+  // sibling moves with the same label (agent and action) cannot be told apart by it: each gets
+  // its number among them and what its next node differs by (the literals told, the human's
+  // agendas, the robot's, the facts true there and not at every sibling's), computed per node
+  const siblingOf = new Map(); // move object -> {k, n, what}
+  function differs(group) {
+    const told = group.map((m) => (m.told || []).join(", "));
+    if (new Set(told).size > 1) return told.map((t) => (t ? `says ${t}` : "says nothing"));
+    const next = group.map((m) => nodes[m.to]);
+    const agendas = (n) => (n.hypotheses && n.hypotheses.length > 1 ? n.hypotheses : [n.human_agenda])
+      .map((a) => a.join(", ") || "nothing").join(" | ");
+    const human = next.map(agendas);
+    if (new Set(human).size > 1) return human.map((a) => `human: ${a}`);
+    const robot = next.map((n) => n.robot_agenda.join(", ") || "nothing");
+    if (new Set(robot).size > 1) return robot.map((a) => `robot: ${a}`);
+    const common = next.map((n) => new Set(n.state)).reduce((a, b) => new Set([...a].filter((x) => b.has(x))));
+    const every = new Set(next.flatMap((n) => n.state));
+    return next.map((n) => {
+      const mine = new Set(n.state);
+      const plus = n.state.filter((a) => !common.has(a));
+      const minus = [...every].filter((a) => !mine.has(a)).sort().map((a) => `not ${a}`);
+      const facts = [...plus, ...minus];
+      return facts.length ? facts.slice(0, 3).join(", ") + (facts.length > 3 ? ", …" : "")
+        : `→ node ${n.id}`;
+    });
+  }
+  for (const n of nodes) {
+    const groups = new Map();
+    for (const m of n.moves) {
+      const key = `${m.agent}\u0000${m.action}`;
+      if (!groups.has(key)) groups.set(key, []);
+      groups.get(key).push(m);
+    }
+    for (const group of groups.values()) {
+      if (group.length < 2) continue;
+      const what = differs(group);
+      group.forEach((m, i) => siblingOf.set(m, { k: i + 1, n: group.length, what: what[i] }));
     }
   }
   const sizeOf = new Array(items.length).fill(1); // items below, folded or not
@@ -78,7 +117,11 @@
   }
 
   const plural = (n, word) => `${n} ${word}${n === 1 ? "" : "s"}`;
-  const moveLabel = (m) => (m ? `${m.agent}: ${m.action}` : "start");
+  const siblingTag = (m) => {
+    const s = m && siblingOf.get(m);
+    return s ? ` (${s.k}/${s.n})` : "";
+  };
+  const moveLabel = (m) => (m ? `${m.agent}: ${m.action}${siblingTag(m)}` : "start");
   const label = (it) => moveLabel(items[it].move);
   const role = (agent) => (agent === ROBOT ? "robot" : agent === HUMAN ? "human" : "");
   const kindOf = (it) => (items[it].move ? items[it].move.kind : "start");
@@ -181,17 +224,26 @@
       attrs["aria-label"] = `node ${n.id}: ${label(it)}, ${plural(n.worlds, "world")}`;
     }
     const g = el("g", attrs, gNodes);
+    const same = m && siblingOf.get(m);
+    const apart = same ? `\n${same.n} sibling moves read the same; this one: ${same.what}` : "";
     el("title", {}, g, item.ref
-      ? `${label(it)}\n→ node ${n.id}, shared by several paths: click to go to its first copy`
-      : `#${n.id} ${label(it)}\ncost ${m ? m.cost : 0}, cost to go ${n.value}`);
+      ? `${label(it)}\n→ node ${n.id}, shared by several paths: click to go to its first copy${apart}`
+      : `#${n.id} ${label(it)}\ncost ${m ? m.cost : 0}, cost to go ${n.value}${apart}`);
     if (m && COMM.has(m.kind)) el("rect", { class: "halo", x: -6, y: -6, width: W + 12, height: H + 12, rx: 9 }, g);
     if (n.goal && !item.ref) el("rect", { class: "goal-ring", x: -4, y: -4, width: W + 8, height: H + 8, rx: 8 }, g);
     const human = m && m.agent === HUMAN;
     el("rect", { class: "box", x: 0, y: 0, width: W, height: H, rx: human ? H / 2 : 5 }, g);
     if (!n.copresent) el("rect", { class: "apart-bar", x: human ? 10 : 0, y: 0, width: 5, height: H }, g);
-    el("text", { x: W / 2, y: 17, "text-anchor": "middle" }, g, truncate(label(it), 24));
+    const tag = siblingTag(m);
+    el("text", { x: W / 2, y: 17, "text-anchor": "middle" }, g,
+      m ? truncate(`${m.agent}: ${m.action}`, 24 - tag.length) + tag : "start");
+    const sibling = m && siblingOf.get(m);
     let sub;
-    if (item.ref) {
+    if (sibling) {
+      g.setAttribute("data-sibling", `${sibling.k}/${sibling.n}`);
+      g.setAttribute("data-differs", sibling.what);
+      sub = [truncate(sibling.what, 28)];
+    } else if (item.ref) {
       sub = [`→ see node ${n.id}`];
     } else {
       sub = [plural(n.worlds, "world"), kText(n)];
@@ -413,6 +465,10 @@
     $("fact-k").textContent = `${n.k} of K = ${policy.K} robot turns unseen by the human`;
     $("fact-worlds").textContent = String(n.worlds);
     $("fact-to-move").textContent = n.to_move || "nobody (goal reached)";
+    const same = m && siblingOf.get(m);
+    $("fact-differs").textContent = same
+      ? `move ${same.k} of ${same.n} that read "${m.agent}: ${m.action}"; this one: ${same.what}` : "";
+    $("fact-differs-term").hidden = $("fact-differs").hidden = !same;
     const nav = $("node-nav");
     nav.textContent = "";
     const ups = parentsOf.get(n.id) || [];
@@ -431,6 +487,11 @@
     ul.textContent = "";
     for (const a of n.state) {
       ul.appendChild(h("li", doubted.has(a) ? { class: "doubted", title: "some world disagrees" } : {}, a));
+    }
+    for (const a of STATIC) { // true in every state and every world: [init] facts nothing changes
+      const li = h("li", { class: "static", "data-static": "true", title: "static: true throughout, from [init]" }, a);
+      li.appendChild(h("span", { class: "tag" }, "static"));
+      ul.appendChild(li);
     }
     const ag = $("agendas");
     ag.textContent = "";
@@ -583,8 +644,17 @@
 
   const moveCount = nodes.reduce((a, n) => a + n.moves.length, 0);
   $("policy-title").textContent = `${policy.problem} — ${policy.domain}`;
+  const objective = policy.objective && policy.objective.kind === "expected" ? "expected" : "worst-case";
+  const mark = (kind) => (kind === objective ? " (optimised)" : "");
+  const costs = $("policy-costs");
+  if (policy.worst_case !== null && policy.worst_case !== undefined &&
+      policy.expected !== null && policy.expected !== undefined) {
+    costs.append(h("span", { id: "policy-worst-case" }, `worst-case cost ${policy.worst_case}${mark("worst-case")}`),
+      " · ", h("span", { id: "policy-expected" }, `expected cost ${policy.expected}${mark("expected")}`));
+  } else {
+    costs.append(h("span", { id: "policy-cost" }, `${objective} cost ${policy.cost} (optimised)`));
+  }
   $("policy-facts").textContent = [
-    `${policy.objective && policy.objective.kind === "expected" ? "expected" : "worst-case"} cost ${policy.cost}`,
     `${policy.leaves} branch${policy.leaves === 1 ? "" : "es"}`,
     plural(policy.communications, "communication"), `K = ${policy.K}`,
     `${plural(nodes.length, "node")} and ${plural(moveCount, "move")}`, `robot ${ROBOT}, human ${HUMAN}`,
