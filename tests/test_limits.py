@@ -321,24 +321,51 @@ def test_the_streamed_file_is_the_text_to_json_gives() -> None:
     assert r.policy.to_json().endswith(' ]\n}\n') or r.policy.to_json().endswith('}\n')
 
 
-def test_validate_stops_at_its_timeout_with_no_verdict(tmp_path: Path) -> None:
-    problem = big_problem(tmp_path)
-    # a policy of the same problem that takes longer than 0.1 s to check: the lifted one
-    # solved with symmetry, expanded (559 nodes, each re-derived: about 0.4 s)
-    text = problem.read_text(encoding="utf-8").replace("symmetry = false", "symmetry = true")
-    problem.write_text(text, encoding="utf-8")
-    r = ehatp.solve(ehatp.load(problem), expand=True)
-    assert r.policy is not None and len(r.policy.nodes) > 500
+def test_validate_stops_at_its_memory_limit_with_no_verdict(tmp_path: Path) -> None:
+    # any process holds more than 1 MB: the budget's first look, before the policy is read,
+    # stops the check (deterministic, unlike a time limit on a check that may be quick)
+    r = ehatp.solve(ehatp.load(CUBES / "p2.toml"))
+    assert r.policy is not None
     pol = tmp_path / "p.json"
     r.policy.write(pol)
-    t0 = time.perf_counter()
-    out = _cli("validate", str(problem), str(pol), "--timeout", "0.1", cwd=tmp_path)
-    took = time.perf_counter() - t0
+    out = _cli("validate", str(CUBES / "p2.toml"), str(pol), "--max-memory", "1M",
+               cwd=tmp_path)
     assert out.returncode == 1, out.stderr
     line = out.stderr.strip()
-    assert line.count("\n") == 0 and line.startswith(f"not checked: {pol}: time limit of 0.1 s")
+    assert line.count("\n") == 0
+    assert line.startswith(f"not checked: {pol}: memory limit of 1 MB reached"), line
     assert "no verdict" in line and "valid" not in out.stdout
-    assert took < 0.1 * 1.1 + 0.5 + 3  # start-up (a fresh interpreter) generously
+
+
+def test_the_validator_looks_at_the_limit_while_it_checks(tmp_path: Path) -> None:
+    # a policy of 559 nodes (the big problem solved with symmetry, expanded): the check the
+    # caller gives is called while grounding, refining and walking, and what it raises stops
+    # the validation and goes through unchanged
+    problem = big_problem(tmp_path)
+    text = problem.read_text(encoding="utf-8").replace("symmetry = false", "symmetry = true")
+    p = loads(text, "big.toml")
+    r = ehatp.solve(p, expand=True)
+    assert r.policy is not None and len(r.policy.nodes) > 500
+    calls = 0
+
+    def count() -> None:
+        nonlocal calls
+        calls += 1
+
+    assert ehatp.validate(p, r.policy, check=count).ok
+    assert calls > 10
+    stop_at = calls // 2
+
+    def stop() -> None:
+        nonlocal calls
+        calls += 1
+        if calls >= stop_at:
+            raise LimitReached("timeout", "time limit of 1 s reached")
+
+    calls = 0
+    with pytest.raises(LimitReached):
+        ehatp.validate(p, r.policy, check=stop)
+    assert calls == stop_at
 
 
 def test_validate_has_the_problems_limits_and_checks_in_time_when_they_allow(
