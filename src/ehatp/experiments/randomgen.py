@@ -74,7 +74,10 @@ What a spec draws (probabilities are per problem unless said otherwise):
   "plan", no asking, the robot announcing its intention, the expected objective (with ``pass``
   weighted 1/2 one time in ten) and other tie-breaks (0.2); the robot may ask the human's
   intention with probability 0.25. Grounding: one problem in five grounds every task on demand
-  (``[limits] ground_ahead = 0``), one in five after 2 tasks, the rest ahead.
+  (``[limits] ground_ahead = 0``), one in five after 2 tasks, the rest ahead. Joint steps
+  (``[steps] mode = "concurrent"``, docs/concurrent.md) with probability 0.2 where the
+  options are drawn, witness "start" one time in four; those problems leave speech, the
+  robot's question and its announcement at their defaults.
 
 Settings are drawn in one place, :data:`SETTINGS`, a dict from ``"table.field"`` to a sampler;
 each is drawn from its own generator (seeded by the seed and the key), so adding a setting
@@ -118,6 +121,9 @@ from ..model.options import (
     Passes,
     Relevance,
     Speech,
+    StepMode,
+    Steps,
+    Witness,
 )
 from ..model.problem import BeliefWorld, Costs, Limits, Problem
 
@@ -162,6 +168,9 @@ SETTINGS: dict[str, Sampler] = {
                                  (("length",), 1)]),
     # tasks grounded before the search, the rest on demand (docs/semantics.md §1, "Grounding")
     "limits.ground_ahead": _weighted([(Limits.ground_ahead, 3), (0, 1), (2, 1)]),
+    # joint, compliant steps (docs/concurrent.md)
+    "steps.mode": _weighted([(StepMode.TURNS, 4), (StepMode.CONCURRENT, 1)]),
+    "steps.witness": _weighted([(Witness.WHOLE, 3), (Witness.START, 1)]),
 }
 """``"table.field"`` -> sampler. Add a problem setting with one line here (and, for a new
 table, one line in :data:`TABLES`); a field not drawn keeps its default."""
@@ -173,10 +182,11 @@ TABLES: dict[str, type | None] = {
     "communication": Communication,
     "objective": Objective,
     "limits": Limits,
+    "steps": Steps,
 }
 """Each table of :data:`SETTINGS`: the dataclass its fields build, given to :class:`Problem`
 under the table's name (None: the fields are :class:`Problem`'s own)."""
-OPTION_TABLES = ("human", "communication", "objective")
+OPTION_TABLES = ("human", "communication", "objective", "steps")
 """The tables that choose a model (docs/semantics.md); :meth:`Spec.options` lists what they
 set away from the defaults."""
 
@@ -189,8 +199,19 @@ def draw_settings(seed: int) -> tuple[tuple[str, object], ...]:
     """The settings of :data:`SETTINGS`, each from its own generator; on a share
     :data:`PLAIN` of the seeds, those of :data:`OPTION_TABLES` are left at their defaults."""
     plain = random.Random(f"{seed}:plain").random() < PLAIN
-    return tuple((key, SETTINGS[key](random.Random(f"{seed}:{key}"))) for key in sorted(SETTINGS)
-                 if not (plain and key.partition(".")[0] in OPTION_TABLES))
+    drawn = tuple((key, SETTINGS[key](random.Random(f"{seed}:{key}")))
+                  for key in sorted(SETTINGS)
+                  if not (plain and key.partition(".")[0] in OPTION_TABLES))
+    if dict(drawn).get("steps.mode") != StepMode.CONCURRENT:
+        return tuple((k, v) for k, v in drawn if k != "steps.witness")
+    # joint steps read neither speech with an action nor the robot's question or
+    # announcement (docs/concurrent.md): those keep their defaults
+    return tuple((k, v) for k, v in drawn if k not in NOT_JOINT)
+
+
+NOT_JOINT = frozenset({"communication.speech", "communication.robot_asks",
+                       "communication.announce"})
+"""Settings a problem in joint steps leaves at their defaults."""
 
 
 # --- the spec: plain data ---------------------------------------------------------------------
