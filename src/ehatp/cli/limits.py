@@ -32,7 +32,7 @@ STANDALONE = Standalone()
 
 SLACK_FRACTION, SLACK_S = 0.10, 0.75
 """The backstop ends the process at ``limit * (1 + SLACK_FRACTION) + SLACK_S`` after the
-command started it: past the budget's own hard limit (5 % + 0.5 s) by a step the work cannot
+command started it: past the budget's own hard limit (5 % + 0.2 s) by a step the work cannot
 interrupt (parsing a few megabytes of JSON), so the command's own one-line stop comes first."""
 
 WATCH_EVERY_S = 0.1  # how often the watchdog looks

@@ -27,7 +27,7 @@ from ..model.problem import Limits, parse_size
 from .stats import Progress, Stats
 
 POLL_S = 0.05  # how often the clock and the resident set size are looked at
-GRACE_FRACTION, GRACE_S = 0.05, 0.5  # the hard deadline: timeout * 1.05 + 0.5 s
+GRACE_FRACTION, GRACE_S = 0.05, 0.2  # the hard deadline: timeout * 1.05 + 0.2 s
 # what the values pass and extraction need after the search, per distinct state (rough
 # measurements, generous): time, and memory beyond what the graph already holds
 POST_S_PER_STATE = 12e-6
