@@ -99,3 +99,15 @@ def test_bench_scaling_says_each_finished_instance_into_a_pipe() -> None:
     assert lines[0].endswith(" s, 121 distinct states")
     assert lines[1].startswith("bench scaling: [2/2] cubes-c3-b2-opaque-k2: solved in ")
     assert lines[1].endswith(" s, 133 distinct states")
+
+
+@pytest.mark.parametrize(("fmt", "kind"), [("btcpp4", "BehaviorTree.CPP v4 XML"),
+                                           ("py_trees", "py_trees module (Python)")])
+def test_export_bt_to_a_file_says_what_it_wrote(p2_policy: Path, tmp_path: Path, fmt: str,
+                                                kind: str) -> None:
+    out = tmp_path / "p2.out"
+    r = invoke("export", "bt", p2_policy, "--format", fmt, "--out", out)
+    assert r.exit_code == 0
+    size = file_size(out.stat().st_size)
+    assert r.stderr == f"export bt: wrote {out}: {kind} of P2, 26 policy nodes, {size}\n"
+    assert r.stdout == ""

@@ -49,4 +49,7 @@ def export_bt(
             raise InputError(str(policy), "", str(e), "give a policy written by ehatp solve"
                              ) from None
     text = to_btcpp(forest) if fmt is BTFormat.btcpp4 else to_py_trees_source(forest)
-    write_output(text, out)
+    kind = ("BehaviorTree.CPP v4 XML" if fmt is BTFormat.btcpp4
+            else "py_trees module (Python)")
+    write_output(text, out, f"{kind} of {pol.problem}, {len(pol.nodes)} policy nodes",
+                 command="export bt")
