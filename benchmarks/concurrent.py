@@ -1,6 +1,7 @@
 """Table 1's nine instances in turns and in joint, compliant steps (docs/concurrent.md).
 
     .venv/bin/python benchmarks/concurrent.py [--repeat N] [--witness whole|start]
+        [--first human|robot]
 
 For each instance: the turn-taking policy's worst case, communications and |W| beside the
 joint-step policy's makespan (worst case, in steps), communications and |W|, the distinct states
@@ -22,7 +23,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "src"))
 
 import ehatp  # noqa: E402
-from ehatp import StepMode, Steps, Witness  # noqa: E402
+from ehatp import StepFirst, StepMode, Steps, Witness  # noqa: E402
 from ehatp.run.walk import walk_policy  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent / "examples"
@@ -36,8 +37,10 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5, help="runs per instance (best kept)")
     ap.add_argument("--witness", choices=[w.value for w in Witness], default="whole")
+    ap.add_argument("--first", choices=[f.value for f in StepFirst], default="human")
     args = ap.parse_args(argv)
-    steps = Steps(StepMode.CONCURRENT, witness=Witness(args.witness))
+    steps = Steps(StepMode.CONCURRENT, first=StepFirst(args.first),
+                  witness=Witness(args.witness))
     print("| inst | turns: cost | comm | \\|W\\| | steps: makespan | comm | \\|W\\| | distinct "
           "| ms |")
     print("|---|---|---|---|---|---|---|---|---|")

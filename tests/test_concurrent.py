@@ -18,10 +18,12 @@ from ehatp import (
     Executor,
     InputError,
     Problem,
+    StepFirst,
     StepMode,
     Steps,
     Var,
     Witness,
+    forall,
 )
 from ehatp.formats.policy import Policy
 from ehatp.run.walk import walk_policy
@@ -278,12 +280,79 @@ def test_a_resource_must_be_a_parameter_or_a_name() -> None:
         d.robot.action("grab", x, resources=[y])
 
 
-def test_the_robot_deciding_first_is_refused_until_built() -> None:
-    """C4 ``first = "robot"`` is not built yet: solving says so in one line."""
-    from ehatp import StepFirst
+# --- C4, first = "robot" -------------------------------------------------------------------
 
-    with pytest.raises(InputError, match="first"):
-        ehatp.solve(chores(Steps(StepMode.CONCURRENT, first=StepFirst.ROBOT)))
+ROBOT_FIRST = Steps(StepMode.CONCURRENT, first=StepFirst.ROBOT)
+
+
+def test_a_robot_deciding_first_takes_the_cube_and_the_human_yields() -> None:
+    """C4 with ``first = "robot"``, by hand. E1: the robot puts ``a`` at once; the human puts
+    ``b`` beside it (1 step) or passes, and then, the robot having nothing left, puts ``b``
+    while it waits (2): worst case 2. E2: the robot picks ``c`` at once; the human sees it
+    start (co-present before and after), so its own ``pick(c)`` is no option (C4: it adapts),
+    and it passes; then the robot places it while the human, blocked, passes: 2 steps, one
+    branch; the robot's wait would leave the human's pick and the robot's later placing no
+    quicker. Each move that starts a step is the robot's (``"step": "robot"``)."""
+    e1 = solved(chores(ROBOT_FIRST))
+    assert (e1.cost, e1.nodes[0].moves[0].action, e1.nodes[0].moves[0].step) == (
+        2, "put(a)", "robot")
+    e2 = solved(two_hands(ROBOT_FIRST))
+    assert (e2.cost, e2.leaves) == (2, 1)
+    assert [m.action for m in e2.nodes[e2.nodes[0].moves[0].to].moves] == ["pass"]
+
+
+def grab_and_go(steps: Steps) -> Problem:
+    """The human leaves the room taking the cube, or just leaves once the cube is gone; the
+    robot is to clear the cube off the table. Co-present iff the human is in the room."""
+    d = Domain("grab-and-go", robot="R", human="H")
+    c = Var("c", d.type("cube"))
+    here, ontable = d.predicate("h_in_room"), d.predicate("ontable", c)
+    d.copresence = here()
+    clear = d.robot.task("clear", c, done=~ontable(c))
+    d.robot.method(clear, "pick", pre=ontable(c),
+                   subtasks=[d.robot.action("pick", c, pre=ontable(c),
+                                            effects=[~ontable(c)])(c)])
+    leave = d.human.task("leave")
+    grab = d.human.action("grab_and_go", c, pre=ontable(c) & here(),
+                          effects=[~ontable(c), ~here()])
+    go = d.human.action("go", pre=here(), effects=[~here()])
+    d.human.method(leave, "with_cube", params=[c], pre=ontable(c), subtasks=[grab(c)])
+    d.human.method(leave, "alone", pre=forall(c, ~ontable(c)), subtasks=[go()])
+    return Problem(name="grab", domain=d, objects={"cube": ["c"]},
+                   init=frozenset({("h_in_room", ()), ("ontable", ("c",))}),
+                   robot_agenda=(("clear", ("c",)),), human_agenda=(("leave", ()),),
+                   steps=steps)
+
+
+@pytest.mark.parametrize(("witness", "fails"), [(Witness.WHOLE, True), (Witness.START, False)])
+def test_an_unseen_conflict_fails_and_a_seen_one_is_avoided(witness: Witness,
+                                                             fails: bool) -> None:
+    """C4 (``first = "robot"``), planner and validator alike. The robot starts picking the
+    cube while the human grabs it and walks out. With witness "whole" the human, gone by the
+    step's end, did not see the robot start: the grab is a failure (a conflict it could not
+    foresee). With "start" it saw the robot start, so the grab is no option at all (it
+    adapts: it passes). Either way the policy waits (the human grabs the cube: 1 step)."""
+    from ehatp.check.concurrent import JointRules
+    from ehatp.epistemic.concurrent import semantics_for
+    from ehatp.model.grounding import ground_problem
+
+    p = grab_and_go(dataclasses.replace(ROBOT_FIRST, witness=witness))
+    sem = semantics_for(ground_problem(p))
+    root = sem.initial()
+    pick = next(m for m in sem.moves(root) if m.label == "pick(c)")
+    assert pick.child is not None
+    grabs = [m for m in sem.moves(pick.child) if m.label == "grab_and_go(c)"]
+    rules = JointRules(p)
+    chosen = next(st for st in rules.robot_choices(rules.initial()) if st.label == "pick(c)")
+    assert chosen.after is not None
+    checked = [st for st in rules.human_options(chosen.after) if st.label == "grab_and_go(c)"]
+    if fails:
+        assert len(grabs) == 1 and grabs[0].child is None and "unaware" in grabs[0].failure
+        assert len(checked) == 1 and checked[0].after is None
+    else:
+        assert grabs == [] and checked == []
+    policy = solved(p)
+    assert (policy.cost, policy.nodes[0].moves[0].action) == (1, "wait")
 
 
 # --- the validator and the executor ---------------------------------------------------------

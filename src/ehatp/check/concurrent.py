@@ -18,14 +18,17 @@ from fractions import Fraction
 
 from ..model.formula import Var
 from ..model.grounded import FINISH, GOp
-from ..model.options import Commute, InformWhere, Passes, Witness
+from ..model.options import Commute, InformWhere, Passes, StepFirst, Witness
 from ..model.problem import Problem
-from ..model.vocabulary import HUMAN, ROBOT
+from ..model.vocabulary import HUMAN, ROBOT, Agent
 from .communication import Semantics
 from .network import Agenda
-from .rules import ACTION, ASK, INFORM, WAIT, EState, Step, World, Worlds, _frac
+from .rules import ACTION, ASK, INFORM, PASS, WAIT, EState, Step, World, Worlds, _frac
 
 STARTED, PASSED = 0, 1  # a reply node's pending human move: an action (with its id), a pass
+# first = "robot": the robot's pending move: an action (its id and the index of its
+# refinement at T), wait, inform (the mask told)
+ACTED, WAITED, TOLD = 2, 3, 4
 
 
 class JointRules(Semantics):
@@ -37,20 +40,28 @@ class JointRules(Semantics):
         self.c_step = _frac(problem.steps.cost)
 
     # -- C1, C10 -------------------------------------------------------------------------------
+    @property
+    def first(self) -> Agent:
+        """C4: who decides first in a step."""
+        return ROBOT if self.steps.first == StepFirst.ROBOT else HUMAN
+
     def initial(self) -> EState:
-        """C1, C4: the root is a step's start, where the human decides first."""
-        return replace(super().initial(), turn=HUMAN)
+        """C1, C4: the root is a step's start, where the agent who decides first moves."""
+        return replace(super().initial(), turn=self.first)
 
     def is_goal(self, es: EState) -> bool:
         """C10: §6 at a step's start; a node in the middle of a step is never a goal."""
         return not es.pending and super().is_goal(es)
 
-    @staticmethod
-    def step_of(st: Step) -> str:
-        """Return the ``step`` a policy move records for ``st`` (docs/policy-format.md)."""
+    def step_of(self, st: Step) -> str:
+        """Return the ``step`` a policy move records for ``st`` (docs/policy-format.md): a
+        question is ``ask``; the move of the agent who decides first is named after it
+        (``human``, ``robot``), the other's is ``reply``."""
         if st.kind == ASK:
             return "ask"
-        return "human" if st.agent == HUMAN else "reply"
+        if st.agent == self.first:
+            return "human" if st.agent == HUMAN else "robot"
+        return "reply"
 
     # -- C2, C5: the human decides -----------------------------------------------------------
     def may_pass(self, es: EState, certain: bool, asks: bool, cop: bool) -> bool:
@@ -61,7 +72,9 @@ class JointRules(Semantics):
         if self.p.human.passes == Passes.IDLE:
             return not certain and not asks
         if cop:
-            return bool(self.robot_actions(es)) or (not certain and not asks)
+            robot_does = (es.pending[0] != WAITED if es.pending
+                          else bool(self.robot_actions(es)))
+            return robot_does or (not certain and not asks)
         return not certain
 
     def human_options(self, es: EState) -> list[Step]:
@@ -69,6 +82,8 @@ class JointRules(Semantics):
         an action or a pass leads to the reply node (nothing applied yet, cost 0); an action
         not applicable in T fails (C10); a question is the whole step, answered truthfully
         (C3), costing the step and the question."""
+        if es.pending:
+            return self.human_replies(es)
         g = self.grounded
         out: list[Step] = []
         for st in super().human_options(replace(es, forced=False)):
@@ -143,40 +158,145 @@ class JointRules(Semantics):
                 continue
             if h is not None and not self.together(es, h, t_h, a, rest):
                 continue
-            op = g.robot.ops[a]
-            t2 = op.apply(t_h)
-            k = es.k
-            if seen:
-                ws: set[World] = set()
-                for s, tn in w_h:
-                    for b, rest2 in self.refine(g.robot_seen_by_human, tn, s):
-                        if b == a:
-                            ws.add((self.rh_op(a).apply(s), rest2))
-                if not ws:
-                    told = self.attributed(rest)
-                    ws = {(self.rh_op(a).apply(s), told) for s, _ in w_h}
-                worlds = self.set_inferable(frozenset(ws), t_h, t2)
-            else:
-                worlds, k = self.product(w_h), k + 1
             name = g.task_names[a]
             out.append(Step(ROBOT, ACTION, name, self.c_step,
-                            self.next_node(es, t2, rest, worlds, k), act=name))
+                            self.robot_did(es, a, rest, t_h, w_h, seen), act=name))
         if h is not None:
-            worlds, k = w_h, es.k
-            if not seen and k < self.K:
-                worlds, k = self.product(w_h), k + 1
             out.append(Step(ROBOT, WAIT, "wait", self.c_step,
-                            self.next_node(es, t_h, es.robot, worlds, k), act="wait"))
+                            self.robot_waited(es, t_h, w_h, seen), act="wait"))
         heard = seen or self.p.communication.inform == InformWhere.ANYWHERE
         mid = EState(HUMAN, t_h, es.robot, es.humans, self.sa(w_h, t_h),
                      0 if self.cop(t_h) else es.k, 0)
         return out, [(mid, heard)]
 
+    def robot_did(self, es: EState, a: int, rest: Agenda, t_h: int, w_h: Worlds,
+                  seen: bool) -> EState:
+        """C6-C7: the next step's start after the robot's action ``a`` (leaving ``rest``) in
+        a step where the human's move led to ``t_h`` and ``w_h``: seen, the worlds that
+        anticipate ``a`` advance by it (none: every world revised to the robot's agenda)
+        and the inferable atoms it changed are learnt; unseen, the product, k + 1."""
+        g = self.grounded
+        t2 = g.robot.ops[a].apply(t_h)
+        k = es.k
+        if seen:
+            ws: set[World] = set()
+            for s, tn in w_h:
+                for b, rest2 in self.refine(g.robot_seen_by_human, tn, s):
+                    if b == a:
+                        ws.add((self.rh_op(a).apply(s), rest2))
+            if not ws:
+                told = self.attributed(rest)
+                ws = {(self.rh_op(a).apply(s), told) for s, _ in w_h}
+            worlds = self.set_inferable(frozenset(ws), t_h, t2)
+        else:
+            worlds, k = self.product(w_h), k + 1
+        return self.next_node(es, t2, rest, worlds, k)
+
+    def robot_waited(self, es: EState, t_h: int, w_h: Worlds, seen: bool) -> EState:
+        """C7: the next step's start after the robot waited: unseen while k < K, one of the
+        events the human imagines (the product, k + 1)."""
+        worlds, k = w_h, es.k
+        if not seen and k < self.K:
+            worlds, k = self.product(w_h), k + 1
+        return self.next_node(es, t_h, es.robot, worlds, k)
+
     def next_node(self, es: EState, t2: int, robot: Agenda, worlds: Worlds, k: int) -> EState:
         """C7.4: the next step's start: situation assessment on ``t2``, a non-anticipating
         human seeing a finished robot, k reset when co-present."""
         worlds = self.sees_robot_done(self.sa(worlds, t2), t2, robot)
-        return EState(HUMAN, t2, robot, es.humans, worlds, 0 if self.cop(t2) else k, 0)
+        return EState(self.first, t2, robot, es.humans, worlds, 0 if self.cop(t2) else k, 0)
+
+    # -- C4, first = "robot" ----------------------------------------------------------------
+    def robot_choices(self, es: EState) -> list[Step]:
+        """C2, C4 (``first = "robot"``): the robot's actions and ``wait`` at a step's start,
+        each leading to the node where the human's moves that go with it are checked; they
+        cost nothing (the human's move pays the step). Two actions of one label are named by
+        the agenda they leave, ``fetch [shelve]``. (Its informs: :meth:`robot_tells`.)"""
+        g = self.grounded
+        acts = self.robot_actions(es)
+        names = [g.task_names[a] for a, _ in acts]
+        out = []
+        for i, (a, rest) in enumerate(acts):
+            name = names[i]
+            label = name if names.count(name) == 1 else f"{name} [{', '.join(self.shown(rest))}]"
+            out.append(Step(ROBOT, ACTION, label, Fraction(0),
+                            replace(es, turn=HUMAN, pending=(ACTED, a, i)), act=name))
+        out.append(Step(ROBOT, WAIT, "wait", Fraction(0),
+                        replace(es, turn=HUMAN, pending=(WAITED,)), act="wait"))
+        return out
+
+    def robot_tells(self, es: EState, units: list[int]) -> Step:
+        """C2, §5 (``first = "robot"``): ``inform(A)`` at a step's start, heard before the
+        human moves; it costs ``inform`` (the human's move pays the step)."""
+        mask = 0
+        for u in units:
+            mask |= u
+        label = f"inform({', '.join(self.literals(es.true, sorted(units)))})"
+        return Step(ROBOT, INFORM, label, _frac(self.p.costs.inform),
+                    replace(es, turn=HUMAN, pending=(TOLD, mask)))
+
+    def human_replies(self, es: EState) -> list[Step]:
+        """C3-C8, C10 (``first = "robot"``): the human's moves beside the robot's chosen one,
+        each a whole step (``[steps] cost``; a question adds ``ask``).
+
+        Pseudo-code::
+
+            W0 = W, told A first when the robot informs
+            each human action h (§4 on W0, per label): not applicable in T: fails (C10);
+                seen = co-present in T and (in h(T), or witness = "start")         (C8)
+                the robot's action a not going with h (C3), or unseen at k = K:
+                    seen: h is no option (the human adapts); unseen: h fails (C4)
+                else the step as with the human first (C6, C7)
+            ask(phi) only beside wait; pass never beside wait (C3, C5)
+        """
+        g = self.grounded
+        kind = es.pending[0]
+        a, rest = -1, es.robot
+        w0 = es.worlds
+        if kind == ACTED:
+            a, rest = self.robot_actions(es)[es.pending[2]]
+        elif kind == TOLD:
+            w0 = self.heard(es.worlds, es.true, self.units(es.pending[1]))
+        start = replace(es, worlds=w0, forced=False)
+        out: list[Step] = []
+        for st in super().human_options(start):
+            if st.kind == ASK:
+                if kind == WAITED:
+                    assert st.after is not None
+                    out.append(replace(st, cost=self.c_step + _frac(self.p.costs.ask),
+                                       after=replace(st.after, turn=ROBOT, passive=0,
+                                                     pending=())))
+                continue
+            if st.kind == PASS:
+                if kind == WAITED:
+                    continue
+                assert st.after is not None
+                now = replace(es, humans=st.after.humans)
+                after = (self.robot_did(now, a, rest, es.true, es.worlds, self.cop(es.true))
+                         if kind == ACTED else
+                         self.next_node(now, es.true, es.robot, w0, es.k))
+                out.append(replace(st, cost=self.c_step, after=after))
+                continue
+            if st.after is None:
+                out.append(replace(st, cost=self.c_step))
+                continue
+            h = g.human.ops[g.task_index[st.act]]
+            t_h = h.apply(es.true)
+            w_h = self.set_inferable(frozenset((h.apply(s), ag) for s, ag in w0), es.true, t_h)
+            seen = self.cop(es.true) and (self.cop(t_h) or self.steps.witness == Witness.START)
+            now = replace(es, humans=st.after.humans)
+            if kind == ACTED:
+                if not self.together(es, h, t_h, a, rest) or (not seen and es.k >= self.K):
+                    if not seen:  # a conflict the human could not foresee
+                        out.append(replace(st, cost=self.c_step, after=None))
+                    continue
+                after = self.robot_did(now, a, rest, t_h, w_h, seen)
+            elif kind == TOLD:
+                after = self.next_node(now, t_h, es.robot, w_h, es.k)
+            else:
+                after = self.robot_waited(now, t_h, w_h, seen)
+            out.append(replace(st, cost=self.c_step, after=after))
+        return out
 
     def robot_actions(self, es: EState) -> list[tuple[int, Agenda]]:
         """C2: the robot's real actions at the step's start (none apart at k = K)."""
@@ -199,4 +319,4 @@ class JointRules(Semantics):
         return Step(ROBOT, INFORM, label, self.c_step + _frac(self.p.costs.inform), after)
 
 
-__all__ = ["PASSED", "STARTED", "JointRules"]
+__all__ = ["ACTED", "PASSED", "STARTED", "TOLD", "WAITED", "JointRules"]

@@ -17,7 +17,7 @@ from fractions import Fraction
 
 from ..formats.policy import Policy, PolicyMove, PolicyNode
 from ..model.grounded import FINISH
-from ..model.options import Intentions, Speech
+from ..model.options import InformWhere, Intentions, Speech
 from ..model.problem import Problem
 from ..model.vocabulary import HUMAN, ROBOT, Agent
 from .communication import INTENTION, Semantics
@@ -200,6 +200,18 @@ class Replay:
     def reply_steps(self, sem: JointRules, es: EState, label: str) -> list[Step] | str:
         """docs/concurrent.md C3-C9: the robot replies a label can denote at a reply node, or
         why it is none."""
+        if sem.first == ROBOT:
+            if es.pending:
+                return "the robot has chosen its move of this step already (C4)"
+            if label.startswith("inform("):
+                if not (sem.cop(es.true)
+                        or self.problem.communication.inform == InformWhere.ANYWHERE):
+                    return "inform is offered only while co-present (§5)"
+                r = self.inform_atoms(es, label)
+                return r if isinstance(r, str) else [sem.robot_tells(es, r)]
+            found = [st for st in sem.robot_choices(es) if st.label == label]
+            return found or (f"{label} is not one of the robot's options here (C2): "
+                             f"{[st.label for st in sem.robot_choices(es)]}")
         if not es.pending:
             return "the robot replies only once the human has chosen its move (C4)"
         steps, mids = sem.replies(es)

@@ -76,7 +76,8 @@ What a spec draws (probabilities are per problem unless said otherwise):
   intention with probability 0.25. Grounding: one problem in five grounds every task on demand
   (``[limits] ground_ahead = 0``), one in five after 2 tasks, the rest ahead. Joint steps
   (``[steps] mode = "concurrent"``, docs/concurrent.md) with probability 0.2 where the
-  options are drawn, witness "start" one time in four; those problems leave speech, the
+  options are drawn, witness "start" one time in four, the robot deciding first one time in
+  four; those problems leave speech, the
   robot's question and its announcement at their defaults.
 
 Settings are drawn in one place, :data:`SETTINGS`, a dict from ``"table.field"`` to a sampler;
@@ -121,6 +122,7 @@ from ..model.options import (
     Passes,
     Relevance,
     Speech,
+    StepFirst,
     StepMode,
     Steps,
     Witness,
@@ -171,6 +173,7 @@ SETTINGS: dict[str, Sampler] = {
     # joint, compliant steps (docs/concurrent.md)
     "steps.mode": _weighted([(StepMode.TURNS, 4), (StepMode.CONCURRENT, 1)]),
     "steps.witness": _weighted([(Witness.WHOLE, 3), (Witness.START, 1)]),
+    "steps.first": _weighted([(StepFirst.HUMAN, 3), (StepFirst.ROBOT, 1)]),
 }
 """``"table.field"`` -> sampler. Add a problem setting with one line here (and, for a new
 table, one line in :data:`TABLES`); a field not drawn keeps its default."""
@@ -203,7 +206,7 @@ def draw_settings(seed: int) -> tuple[tuple[str, object], ...]:
                   for key in sorted(SETTINGS)
                   if not (plain and key.partition(".")[0] in OPTION_TABLES))
     if dict(drawn).get("steps.mode") != StepMode.CONCURRENT:
-        return tuple((k, v) for k, v in drawn if k != "steps.witness")
+        return tuple((k, v) for k, v in drawn if k not in ("steps.witness", "steps.first"))
     # joint steps read neither speech with an action nor the robot's question or
     # announcement (docs/concurrent.md): those keep their defaults
     return tuple((k, v) for k, v in drawn if k not in NOT_JOINT)

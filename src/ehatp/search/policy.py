@@ -130,7 +130,9 @@ def _policy_move(gr: Graph, e: Edge, index: dict[int, int],
         told = list(sem.literals(move.child.true, move.atoms))
     step = ""
     if sem.grounded.problem.steps.concurrent:  # docs/concurrent.md: the moves of a step
-        step = "ask" if move.kind == ASK else "human" if move.agent == HUMAN else "reply"
+        first = sem.grounded.problem.steps.first.value  # who decides first (C4)
+        step = ("ask" if move.kind == ASK else first if sem.names[move.agent] == sem.names[
+            HUMAN if first == "human" else ROBOT] else "reply")
     return PolicyMove(agent=sem.names[move.agent], kind=str(move.kind), action=label,
                       name=str(name), args=list(call_args), cost=move.cost, to=index[e.child],
                       told=told, renaming=renaming, step=step)
