@@ -11,10 +11,17 @@ import random
 
 import pytest
 
+import ehatp
+from ehatp import Domain, Var
+from ehatp.check.rules import Rules
+from ehatp.epistemic.semantics import Semantics
 from ehatp.errors import DomainError
 from ehatp.model.formula import FALSE, TRUE, And, Formula, GAtom, compile_ground
 from ehatp.model.grounded import FINISH, GMethod, GModel, GOp
+from ehatp.model.grounding import ground_problem
 from ehatp.model.htn import Block, Option, Refiner
+
+from .scenarios import problem as scen_problem
 
 A, B, C = (GAtom(i, n) for i, n in enumerate("abc"))
 S0, SA, SC = 0, 0b001, 0b100  # nothing true; a; c
@@ -154,3 +161,48 @@ def test_spliced_refinement_equals_the_walk_on_many_agendas() -> None:
 
 def test_formulas_used_here_compile() -> None:
     assert compile_ground(And((A, C)))(0b101) and not compile_ground(FALSE)(0b111)
+
+
+def saw_domain() -> Domain:
+    """A robot that must ``cut``: each method binds a free size ``?z`` and starts with
+    ``saw(?z)``, which needs the static ``fits(?z)``; only ``m`` fits. Then ``stack``."""
+    d = Domain("saw")
+    size = d.type("size")
+    z = Var("z", size)
+    fits = d.predicate("fits", z)
+    cut_ = d.predicate("cut_done")
+    saw = d.robot.action("saw", z, pre=fits(z), effects=[cut_()])
+    stack = d.robot.action("stack", pre=cut_(), effects=[~cut_()])
+    cut = d.robot.task("cut")
+    d.robot.method(cut, "by_size", params=[z], subtasks=[saw(z), stack()])
+    return d
+
+
+def test_the_planner_and_the_validator_leave_out_a_saw_that_never_fits() -> None:
+    """By hand: ``cut`` has three ground methods (sizes l, m, s); ``saw(l)`` and ``saw(s)``
+    fold to false (``fits`` is static), so only ``m``'s may give: the robot saws m, then
+    stacks (cost 2, the human passing in between: 3). The planner's refinement judges the
+    other two dead (an operator: no method inside); the validator's leaves them out too and
+    accepts the policy."""
+    p = scen_problem(saw_domain(), init=["fits(m)"], robot=["cut"], starts="robot",
+                     objects={"size": ["l", "m", "s"]})
+    sem = Semantics(ground_problem(p))
+    g = sem.grounded
+    r = sem.R
+    saws = {n: g.task_index[f"saw({n})"] for n in "lms"}
+    assert r._dead(saws["l"], set()) == (-(1 << 30), True)
+    assert r._dead(saws["m"], set()) == (None, True)
+    cut = g.task_index["cut"]
+    opts = r.refine((cut,), g.init)
+    assert [(g.task_names[a], [g.task_names[t] for t in rest]) for a, rest in opts] == \
+        [("saw(m)", ["stack"])]
+    kept, every, _, _ = r._kept[cut]
+    assert len(every) == 3 and [w[4] for w in kept] == [saws["m"]]
+    result = ehatp.solve(p)
+    assert result.policy is not None and result.policy.cost == 3
+    rules = Rules(p)
+    rcut = rules.grounded.task_index["cut"]
+    live = rules._live(rules.grounded.robot, rcut)
+    assert live is not None and [m.subtasks[0] for m in live] == \
+        [rules.grounded.task_index["saw(m)"]]
+    assert ehatp.validate(p, result.policy).ok

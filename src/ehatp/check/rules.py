@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import TypeVar
 
-from ..model.formula import And, Formula, StateFn, negate
+from ..model.formula import FALSE, And, Formula, StateFn, negate
 from ..model.grounded import FINISH, GMethod, GModel, GOp, Grounded
 from ..model.grounding import ground_problem
 from ..model.options import Intentions, Passes
@@ -139,6 +139,9 @@ class Rules:
         # caller's may raise from it to stop the check (the validator knows no limits itself)
         self.check: Callable[[], None] = check if check is not None else _no_check
         self._steps = 0
+        # refine()'s answers: (model, agenda, state, tasks around) -> options
+        self._refined: dict[tuple[int, Agenda, int, frozenset[int]], list[tuple[int, Agenda]]] = {}
+        self._lives: dict[tuple[int, int], tuple[GMethod, ...]] = {}  # (model, task): _live
         self.grounded: Grounded = ground_problem(problem, check)
         self.names = (problem.domain.robot_name, problem.domain.human_name)
         self.K = problem.K
@@ -163,12 +166,38 @@ class Rules:
             return (op.done_f, op.done) if op.done_f is not None and op.done is not None else None
         return model.done.get(t)
 
+    def _live(self, model: GModel, t: int) -> tuple[GMethod, ...] | None:
+        """§1: task ``t``'s methods without those whose subtasks, in order, start with an
+        action that can never apply (its precondition is false, it has no done-condition):
+        refining such a method gives nothing in any state. None while a first subtask is not
+        grounded yet (the walk grounds it when it gets there, in its order)."""
+        key = (id(model), t)
+        r = self._lives.get(key)
+        if r is None:
+            keep = []
+            for method in model.methods.get(t, ()):
+                if method.subtasks and method.order is None:
+                    first = method.subtasks[0]
+                    if not model.ready(first):
+                        return None
+                    op = model.ops.get(first)
+                    if op is not None and op.done is None and op.pre_f == FALSE:
+                        continue
+                keep.append(method)
+            r = self._lives[key] = tuple(keep)
+        return r
+
     def refine(self, model: GModel, agenda: Agenda, s: int,
                around: frozenset[int] = frozenset()) -> list[tuple[int, Agenda]]:
         """§1: refine(agenda, S): (first primitive action, remaining agenda) pairs; FINISH
         when the agenda can be completed. A task met again at the front while it is being
         refined (before any action) is a loop, and that way is closed; ``around``: the tasks
-        being refined around ``agenda`` (a block member's)."""
+        being refined around ``agenda`` (a block member's). Memoised: the answer depends on
+        nothing else (a block member met again in the same state is refined once)."""
+        key = (id(model), agenda, s, around)
+        known = self._refined.get(key)
+        if known is not None:
+            return list(known)
         out: list[tuple[int, Agenda]] = []
 
         def go(ag: Agenda, depth: int, opened: tuple[tuple[int, Agenda], ...]) -> None:
@@ -211,12 +240,14 @@ class Rules:
                 return
             if t in busy:
                 return  # a loop: refined again inside its own refinement
-            for method in model.methods.get(t, ()):
+            live = self._live(model, t) if depth < 10_000 else None
+            for method in model.methods.get(t, ()) if live is None else live:
                 if method.pre(s):
                     go(self.subtasks(method) + rest, depth + 1, (*still, (t, rest)))
 
         go(agenda, 0, ())
-        return _dedupe(out)
+        found = self._refined[key] = _dedupe(out)
+        return list(found)
 
     def hrefine(self, agenda: Agenda, states: frozenset[int],
                 conds0: tuple[Formula, ...] = (),
