@@ -420,3 +420,28 @@ def test_table1_in_joint_steps_is_never_slower_than_in_turns(name: str) -> None:
     p = ehatp.load(EXAMPLES / f"{name}.toml")
     joint = solved(dataclasses.replace(p, steps=JOINT))
     assert joint.cost <= ehatp.solve(p).stats["cost"]
+
+
+# --- resources from an HDDL sidecar ---------------------------------------------------------
+
+def test_an_hddl_sidecar_declares_what_an_action_holds(tmp_path: Path) -> None:
+    """docs/hddl.md: the sidecar's ``[resources]`` gives an imported action its resources
+    (``?t``: its parameter; a name as it is); a parameter the action lacks, or an action the
+    domain lacks, is one line."""
+    pytest.importorskip("unified_planning", reason="ehatp[hddl] (unified-planning) not installed")
+    from ehatp.formats import hddl
+
+    data = Path(__file__).parent / "data" / "hddl"
+
+    def imported(resources: str) -> hddl.Imported:
+        side = tmp_path / "side.toml"
+        side.write_text(f"[resources]\n{resources}\n", encoding="utf-8")
+        return hddl.import_hddl(data / "transport-domain.hddl", data / "transport-p1.hddl",
+                                sidecar=side)
+
+    d = imported('drive = ["?t", "road"]').domain()
+    assert [str(x) for x in d.robot.operators["drive"].resources] == ["?t", "road"]
+    with pytest.raises(hddl.HddlUnsupported, match=r"\?x is not a parameter of drive"):
+        imported('drive = ["?x"]')
+    with pytest.raises(hddl.HddlUnsupported, match="'fly'"):
+        imported('fly = ["?t"]')

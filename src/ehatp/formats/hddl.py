@@ -434,6 +434,10 @@ class _Converter:
         else:
             L += ["", "    # always together (no [copresence] in the sidecar)"]
         L += ["", f"    # {self.agent}: actions", f"    m = {model}"]
+        unknown = sorted(set(side.resources) - {a.name for a in p.actions})
+        if unknown:
+            raise self.unsupported(f"[resources] names {unknown[0]!r}, which is not an action "
+                                   "of the domain")
         cost = self.costs()
         for a in sorted(p.actions, key=lambda a: a.name):
             self.action(a, cost.get(a.name, 1))
@@ -621,7 +625,20 @@ class _Converter:
         args.append(f"effects=[{', '.join(effs)}]")
         if cost != 1:
             args.append(f"cost={cost}")
+        held = self.side.resources.get(a.name)
+        if held:
+            args.append(f"resources=[{', '.join(self.resource(a.name, x, env) for x in held)}]")
         self.lines.append(self.wrap(f"    {self.names.get('task', a.name)} = m.action(", args))
+
+    def resource(self, action: str, x: str, env: dict[str, str]) -> str:
+        """A ``[resources]`` entry of the sidecar as the DSL writes it: ``?x`` the action's
+        parameter, anything else a name (docs/concurrent.md, C3 c)."""
+        if not x.startswith("?"):
+            return _q(x)
+        if x[1:] not in env:
+            raise self.unsupported(f"[resources] {action}: {x} is not a parameter of "
+                                   f"{action} ({', '.join('?' + n for n in env) or 'none'})")
+        return env[x[1:]]
 
     def wrap(self, head: str, args: Sequence[str], tail: str = ")") -> str:
         """``head`` + the arguments, filled into lines of at most 99 characters where they

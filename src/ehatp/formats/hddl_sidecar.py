@@ -43,6 +43,9 @@ class Sidecar:
     # knows the robot's model, M_R^H = M_R, and follows which methods it may be using) or
     # "nothing" (M_R^H empty: it sees the robot's actions, and expects none)
     expects: str = "plan"
+    # action -> what it holds while it runs ("?x": its parameter x, else a name): joint steps
+    # never do two actions holding a common one together (docs/concurrent.md, C3 c)
+    resources: dict[str, list[str]] = field(default_factory=dict)
     problem: dict[str, Any] = field(default_factory=dict)  # [problem] K, starts, name
     limits: dict[str, Any] = field(default_factory=dict)  # [limits] of the problem
     customize: Path | None = None  # a Python sidecar with customize(d), run last
@@ -74,6 +77,7 @@ _SIDECAR_KEYS = {
     "observability": {"default", "when", "observable", "inferable", "hidden"},
     "copresence": {"when"},
     "other": {"model", "agenda", "expects"},
+    "resources": set(),  # any action name
     "problem": {"name", "K", "starts", "description"},
     "limits": {"timeout", "max_states", "max_depth", "max_memory", "max_decomposition",
                "symmetry"},
@@ -184,7 +188,8 @@ def _sidecar_from(data: Mapping[str, Any], where: str, check: bool = True) -> Si
         if keys is None:
             raise HddlUnsupported(f"{where}: unknown table [{table}]; use "
                                   f"{', '.join(f'[{t}]' for t in _SIDECAR_KEYS)}")
-        bad = sorted(set(value) - keys) if table != "observability" else []
+        bad = (sorted(set(value) - keys) if table not in ("observability", "resources")
+               else [])
         if bad:
             raise HddlUnsupported(f"{where}: [{table}] has no key {bad[0]!r}; use "
                                   f"{', '.join(sorted(keys))}")
@@ -204,6 +209,8 @@ def _sidecar_from(data: Mapping[str, Any], where: str, check: bool = True) -> Si
     s.other = str(other.get("model", "none"))
     s.other_agenda = [str(x) for x in other.get("agenda", [])]
     s.expects = str(other.get("expects", "plan"))
+    s.resources = {str(a): [str(x) for x in held]
+                   for a, held in data.get("resources", {}).items()}
     s.problem = dict(data.get("problem", {}))
     s.limits = dict(data.get("limits", {}))
     if check:
