@@ -445,3 +445,32 @@ def test_an_hddl_sidecar_declares_what_an_action_holds(tmp_path: Path) -> None:
         imported('drive = ["?x"]')
     with pytest.raises(hddl.HddlUnsupported, match="'fly'"):
         imported('fly = ["?t"]')
+
+
+# --- openings and replanning ----------------------------------------------------------------
+
+@pytest.mark.parametrize(("first", "after", "cost"), [
+    (StepFirst.HUMAN, ("H move(mt, ot)", "R pick(r)", "H pick(w)"), 4),
+    (StepFirst.ROBOT, ("R pick(r)", "H move(mt, ot)"), 4),
+])
+def test_an_opening_is_played_move_by_move_in_joint_steps(first: StepFirst,
+                                                          after: tuple[str, ...],
+                                                          cost: int) -> None:
+    """``[problem] after`` names the moves of the steps played (each step two moves, the
+    one who decides first named first); the policy starts where they end, mid-step or not,
+    and is checked and walked from there. P2: after the human leaves and the robot picks
+    ``r`` unseen, 4 steps remain in the worst case either way."""
+    p = dataclasses.replace(ehatp.load(P2), after=after,
+                            steps=dataclasses.replace(JOINT, first=first))
+    policy = solved(p)
+    assert policy.cost == cost and policy.after == list(after)
+
+
+def test_the_executor_replans_in_the_middle_of_a_step() -> None:
+    """A replan from a reply node (the human's move seen, the robot's not chosen yet) plays
+    the history as an opening and follows the new policy: the robot's reply comes next."""
+    ex = Executor(dataclasses.replace(ehatp.load(P2), steps=JOINT))
+    ex.observe_human_action("move(mt, ot)")
+    assert ex.replan().status == "solved"
+    reply = ex.next_robot_action()
+    assert reply is not None and reply.label == "pick(r)"

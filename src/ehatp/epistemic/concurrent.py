@@ -75,7 +75,7 @@ def semantics_for(grounded: Grounded) -> Semantics:
 def check_concurrent(grounded: Grounded) -> None:
     """Raise :class:`InputError` when the problem combines joint steps with a setting they do
     not read (docs/concurrent.md, "Open points"): speech with an action, the robot's
-    question or announcement, or an opening."""
+    question or announcement."""
     p = grounded.problem
     bad = []
     if p.communication.speech == Speech.WITH_ACTION:
@@ -85,8 +85,6 @@ def check_concurrent(grounded: Grounded) -> None:
         bad.append(("[communication] robot_asks", "leave robot_asks out"))
     if p.communication.announce:
         bad.append(("[communication] announce", "leave announce out"))
-    if p.after:
-        bad.append(("[problem] after", "leave the opening out"))
     if bad:
         place, fix = bad[0]
         raise InputError(p.source, place, 'not supported with [steps] mode = "concurrent"', fix)

@@ -289,9 +289,6 @@ def read_steps(r: _Reader, data: Mapping[str, Any]) -> Steps:
             if data.get(table, {}).get(key) == bad:
                 raise r.err(f"[{table}] {key}", f"{key} = {bad!r} is not supported with "
                             '[steps] mode = "concurrent"', fix, key)
-        if data.get("problem", {}).get("after"):
-            raise r.err("[problem] after", 'an opening is not supported with [steps] mode = '
-                        '"concurrent"', "leave [problem] after out", "after")
     return steps
 
 
