@@ -474,3 +474,29 @@ def test_the_executor_replans_in_the_middle_of_a_step() -> None:
     assert ex.replan().status == "solved"
     reply = ex.next_robot_action()
     assert reply is not None and reply.label == "pick(r)"
+
+
+def test_commute_label_lets_actions_that_do_not_commute_share_a_step() -> None:
+    """C3 b. The robot switches the light on while the human switches it off (each also
+    marks its own chore done): in either order the other is still possible, but the two
+    orders leave the light differently. Under ``commute = "state"`` they are never one step
+    (the reply to the human's switch is ``wait``); under ``"label"`` they are, and the step
+    ends as the robot's action after the human's leaves it (C6: the light on)."""
+    from ehatp import Commute
+
+    def problem(commute: Commute) -> Problem:
+        d = Domain("light", robot="R", human="H")
+        on, done_r, done_h = d.predicate("on")(), d.predicate("done_r")(), d.predicate("done_h")()
+        d.robot.action("switch_on", pre=~done_r, effects=[done_r, on])
+        d.human.action("switch_off", pre=~done_h, effects=[done_h, ~on])
+        return Problem(name="light", domain=d, objects={}, init=frozenset(),
+                       robot_agenda=(("switch_on", ()),), human_agenda=(("switch_off", ()),),
+                       steps=dataclasses.replace(JOINT, commute=commute))
+
+    state = solved(problem(Commute.STATE))
+    assert replies(state)[("switch_off",)] == "wait"
+    label = solved(problem(Commute.LABEL))
+    assert replies(label)[("switch_off",)] == "switch_on"
+    end = next(b for b in label.iter_branches() if b[1].move is not None
+               and b[1].move.action == "switch_off")[-1].node
+    assert "on" in end.state
