@@ -33,7 +33,7 @@ from ..formats.policy import Policy
 from ..formats.policy_check import check_consistent, check_policy_problem, read_policy
 from ..formats.problem_toml import load
 from ..model.options import ObjectiveKind
-from ..model.problem import Problem
+from ..model.problem import Problem, parse_size
 
 if TYPE_CHECKING:
     from rich.console import Console
@@ -88,6 +88,17 @@ def load_policy(path: Path, problem: Path | None = None, *, counts: bool = True,
         with user_errors(path):
             check_consistent(pol, str(path))
     return pol
+
+
+def memory_option(text: str | None) -> int | None:
+    """Return ``--max-memory TEXT`` in bytes (None when not given); a size that does not read
+    is one line, exit 2."""
+    if text is None:
+        return None
+    try:
+        return parse_size(text)
+    except ValueError as e:
+        die(f"--max-memory {text}: {e}; write e.g. 2G, 512M or a number of bytes")
 
 
 def with_objective(prob: Problem, kind: ObjectiveKind | None) -> Problem:

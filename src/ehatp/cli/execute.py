@@ -19,10 +19,9 @@ import typer
 
 from ..errors import ExecutionError, InputError, PolicyMismatch
 from ..formats.policy_check import read_policy
-from ..model.problem import parse_size
 from ..run.execute import EXIT_STOPPED, Emit, replans_folder, run
 from ..run.executor import Executor
-from .common import command_app, die, load_problem, user_errors
+from .common import command_app, load_problem, memory_option, user_errors
 
 app = command_app()
 
@@ -69,12 +68,7 @@ def execute_cmd(
 
     Exit code 0: goal reached; 1: the input ended first, or no policy after replanning;
     2: bad problem or policy."""
-    memory: int | None = None
-    if max_memory is not None:
-        try:
-            memory = parse_size(max_memory)
-        except ValueError as e:
-            die(f"--max-memory {max_memory}: {e}; write e.g. 2G, 512M or a number of bytes")
+    memory = memory_option(max_memory)
     prob = load_problem(problem)
     if timeout is not None or memory is not None:  # the first planning too (no --policy)
         limits = dataclasses.replace(

@@ -12,7 +12,7 @@ import typer
 
 from ..errors import printable
 from ..model.options import ObjectiveKind
-from ..model.problem import Problem, parse_size
+from ..model.problem import Problem
 from ..search.limits import SolveStatus
 from .common import (
     EXIT_NO_POLICY,
@@ -20,6 +20,7 @@ from .common import (
     command_app,
     die,
     load_problem,
+    memory_option,
     stderr_console,
     user_errors,
     with_objective,
@@ -141,12 +142,7 @@ def solve_cmd(
     t0 = time.perf_counter()
     from ..search.limits import Budget
 
-    memory: int | None = None
-    if max_memory is not None:
-        try:
-            memory = parse_size(max_memory)
-        except ValueError as e:
-            die(f"--max-memory {max_memory}: {e}; write e.g. 2G, 512M or a number of bytes")
+    memory = memory_option(max_memory)
     prob = with_objective(load_problem(problem), objective)
     limits = prob.limits
     budget = Budget(limits.timeout if timeout is None else timeout,

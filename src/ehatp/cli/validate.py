@@ -11,13 +11,12 @@ import typer
 
 from ..errors import printable
 from ..model.options import ObjectiveKind
-from ..model.problem import parse_size
 from .common import (
     EXIT_NO_POLICY,
     EXIT_OK,
     command_app,
-    die,
     load_problem,
+    memory_option,
     user_errors,
     with_objective,
 )
@@ -58,12 +57,7 @@ def validate_cmd(
     from .limits import guarded
 
     t0 = time.perf_counter()
-    memory: int | None = None
-    if max_memory is not None:
-        try:
-            memory = parse_size(max_memory)
-        except ValueError as e:
-            die(f"--max-memory {max_memory}: {e}; write e.g. 2G, 512M or a number of bytes")
+    memory = memory_option(max_memory)
     prob = with_objective(load_problem(problem), objective)  # as `solve --objective` planned
     budget = Budget(prob.limits.timeout if timeout is None else timeout,
                     prob.limits.max_memory if memory is None else memory, start=t0)

@@ -6,17 +6,15 @@ TOML or from a Python module, and the literals it writes (``"at(?x, depot)"``, `
 from __future__ import annotations
 
 import importlib.util
-import json
 import re
 import tomllib
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from functools import cache
-from importlib import resources
 from pathlib import Path
-from typing import Any, cast
+from typing import Any
 
 from ..errors import HddlUnsupported, control_char
+from .schema import mismatch
 
 AGENTS = ("robot", "human")
 CLASSES = ("observable", "inferable", "hidden")
@@ -121,41 +119,17 @@ SCHEMA = "sidecar.schema.json"
 """The JSON Schema of a sidecar's tables, shipped beside this module."""
 
 
-@cache
-def _schema_check() -> Callable[[Any], Any]:
-    """Return the compiled check of :data:`SCHEMA` (compiled once per process)."""
-    import fastjsonschema  # on first use
-
-    schema = json.loads(resources.files(__package__).joinpath(SCHEMA).read_text("utf-8"))
-    return cast(Callable[[Any], Any], fastjsonschema.compile(schema))
-
-
 def check_schema(data: Any, where: str) -> None:
     """Raise :class:`HddlUnsupported` unless ``data`` (a sidecar's tables) has the shape the
     sidecar's schema gives: every table and key known, lists where lists go, strings and
     numbers where they go. The error names the first place that does not match, e.g.
     ``side.toml: copresence.when: must be a list``."""
-    import fastjsonschema
-
-    try:
-        _schema_check()(data)
-    except fastjsonschema.JsonSchemaValueException as e:
-        name = str(e.name or "data")
-        place = name[len("data."):] if name.startswith("data.") else "the sidecar"
-        what = str(e.message)
-        if what.startswith(name + " "):
-            what = what[len(name) + 1:]
-        what = _SAY.get(what, what)
-        raise HddlUnsupported(f"{where}: {place}: {what[:200]}; see docs/hddl.md, "
-                              "\"The sidecar\"") from None
-    except RecursionError:
-        raise HddlUnsupported(f"{where}: nested too deeply for a sidecar; see docs/hddl.md, "
-                              "\"The sidecar\"") from None
-
-
-_SAY = {f"must be {kind}": f"must be {say}" for kind, say in [
-    ("integer", "a whole number"), ("number", "a number"), ("string", "a string"),
-    ("boolean", "true or false"), ("array", "a list"), ("object", "a table")]}
+    found = mismatch(SCHEMA, data)
+    if found is not None:
+        place, what = found
+        raise HddlUnsupported(f"{where}: {place or 'the sidecar'}: "
+                              f"{what.replace('an object', 'a table')}; see docs/hddl.md, "
+                              "\"The sidecar\"")
 
 
 def _printable(data: Mapping[str, Any], where: str) -> None:

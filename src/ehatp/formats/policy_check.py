@@ -12,14 +12,13 @@ import json
 import math
 from collections.abc import Callable
 from fractions import Fraction
-from functools import cache
-from importlib import resources
 from pathlib import Path
-from typing import Any, cast
+from typing import Any
 
 from ..errors import InputError
 from ..model.problem import Problem
 from .policy import POLICY_FIX, Policy, malformed
+from .schema import mismatch
 
 
 def read_policy(path: Path | str, *, counts: bool = True,
@@ -48,22 +47,6 @@ SCHEMA = "policy.schema.json"
 """The JSON Schema of policy format versions 2 and 3, shipped beside this module."""
 
 
-@cache
-def _schema_check() -> Callable[[Any], Any]:
-    """Return the compiled check of :data:`SCHEMA` (compiled once per process)."""
-    import fastjsonschema  # on first use: `ehatp --help` loads no schema checker
-
-    schema = json.loads(resources.files(__package__).joinpath(SCHEMA).read_text("utf-8"))
-    return cast(Callable[[Any], Any], fastjsonschema.compile(schema))
-
-
-_SAY = {f"must be {kind}": f"must be {say}" for kind, say in [
-    ("integer", "a whole number"), ("number", "a number"), ("string", "a string"),
-    ("boolean", "true or false"), ("array", "a list"), ("object", "an object"),
-    ("number or null", "a number or null"), ("string or null", "a string or null")]}
-"""The schema checker's words for a type, in the words of the other policy errors."""
-
-
 def _no_constant(name: str) -> Any:
     raise ValueError(f"{name} is not a number JSON allows")
 
@@ -87,22 +70,11 @@ def check_schema(path: Path | str) -> None:
     if not isinstance(raw, dict) or raw.get("version") not in (2, 3) or isinstance(
             raw.get("version"), bool):
         return
-    check = _schema_check()
-    import fastjsonschema
-
-    try:
-        check(raw)
-    except fastjsonschema.JsonSchemaValueException as e:
-        where = str(e.name or "data")
-        place = where[len("data."):] if where.startswith("data.") else ""
-        what = str(e.message)
-        if what.startswith(where + " "):
-            what = what[len(where) + 1:]
-        what = _SAY.get(what, what)
-        raise InputError(name, place, what[:200], POLICY_FIX + " (the file does not match "
-                         "the format's schema: see docs/policy-format.md)") from None
-    except RecursionError:
-        raise InputError(name, "", "nested too deeply for a policy", POLICY_FIX) from None
+    found = mismatch(SCHEMA, raw)
+    if found is not None:
+        place, what = found
+        raise InputError(name, place, what, POLICY_FIX + " (the file does not match the "
+                         "format's schema: see docs/policy-format.md)")
 
 
 def _shape(path: Path | str) -> tuple[str, str] | None:
