@@ -7,11 +7,12 @@ its tree unfolding.
 from __future__ import annotations
 
 from fractions import Fraction
+from typing import Any
 
-from ..model.options import ObjectiveKind
+from ..model.options import Metric, ObjectiveKind
 from ..model.vocabulary import ROBOT
 from .replay import Replay
-from .rules import ANNOUNCE, ASK, INFORM, _num, _same
+from .rules import ACTION, ANNOUNCE, ASK, INFORM, _num, _same
 
 COMMUNICATIONS = (INFORM, ASK, ANNOUNCE)  # the moves counted as communications (§5)
 
@@ -83,6 +84,18 @@ def check_objective(rp: Replay) -> None:
     if ties is not None and list(ties) != list(want.ties):
         rp.fail([], f"policy objective ties are {list(ties)}, but the problem's are "
                   f"{[str(t) for t in want.ties]} (§7)")
+    if want.kind == ObjectiveKind.PREFERENCES:
+        # C11: any of the problem's profiles (a relabelled policy chose another one)
+        profile = str(got.get("profile"))
+        if profile not in want.profiles:
+            rp.fail([], f"policy profile is {profile!r}, not one of the problem's "
+                      f"({', '.join(sorted(want.profiles))}) (C11)")
+        elif got.get("metrics") != [str(m) for m in want.profiles[profile]]:
+            rp.fail([], f"policy profile {profile!r} orders {got.get('metrics')}, the "
+                      f"problem's orders {[str(m) for m in want.profiles[profile]]} (C11)")
+        if got.get("estimate") != str(want.estimate):
+            rp.fail([], f"policy estimate is {got.get('estimate')!r}, the problem's is "
+                      f"{str(want.estimate)!r} (C11)")
 
 
 def check_summary(rp: Replay, order: list[int] | None) -> None:
@@ -115,6 +128,8 @@ def check_summary(rp: Replay, order: list[int] | None) -> None:
                       f"{name.replace('_', '-')} cost is {_num(want)} (§7)")
     if order is None:
         return
+    if rp.problem.objective.kind == ObjectiveKind.PREFERENCES:
+        check_preferences(rp, order)
     # counted in the tree unfolding, by the number of root paths reaching each node
     reach = dict.fromkeys(order, 0)
     reach[0] = 1
@@ -133,6 +148,77 @@ def check_summary(rp: Replay, order: list[int] | None) -> None:
     if pol.leaves != leaves:
         rp.fail([], f"leaves is {pol.leaves}, but the policy has {leaves} leaves in its "
                   "tree unfolding (root-to-leaf branches)")
+
+
+def check_preferences(rp: Replay, order: list[int]) -> None:
+    """C11: the profile's vector the policy records at every node (``objective.vectors``) is
+    its branches' worst (or, ``estimate = "optimistic"``, best) vector, recomputed here from
+    the moves (children first, ``order``). A step ends at a move marked ``"reply"`` or
+    ``"ask"`` and costs ``[steps] cost`` of ``makespan``; ``human_end`` adds that when the
+    human acts in the step (its own move an action: the reply itself with the robot first,
+    the move into the reply node with the human first) or later; ``human_effort`` counts the
+    human's actions, ``effort`` every action, ``communications`` inform, ask and announce
+    moves and moves said with an inform."""
+    pol, problem = rp.policy, rp.problem
+    obj = pol.objective
+    names = obj.get("metrics")
+    vectors = obj.get("vectors")
+    if not isinstance(names, list) or not isinstance(vectors, list) \
+            or len(vectors) != len(pol.nodes) or any(m not in list(Metric) for m in names):
+        rp.fail([], "a preferences policy records objective.metrics and one vector per node "
+                "(objective.vectors) (C11)")
+        return
+    metrics = [Metric(m) for m in names]
+    optimistic = obj.get("estimate") == "optimistic"
+    human = pol.agents.get("human")
+    step = problem.steps.cost
+    acting: set[int] = set()  # reply nodes whose step's human move is an action
+    for node in pol.nodes:
+        for move in node.moves:
+            if move.step == "human" and move.agent == human and move.kind == ACTION:
+                acting.add(move.to)
+    vec: dict[int, tuple[Fraction, ...]] = {}
+    for n in order:
+        node = pol.nodes[n]
+        if not node.moves:
+            vec[n] = tuple(Fraction(0) for _ in metrics)
+            continue
+        options: list[tuple[Fraction, ...]] = []
+        for move in node.moves:
+            after = vec.get(move.to)
+            if after is None:
+                return  # a cycle or a violation reported elsewhere
+            ends = move.step in ("reply", "ask")
+            is_human = move.agent == human
+            acts = move.kind == ACTION
+            human_acts = acts if is_human else n in acting
+            out: list[Fraction] = []
+            for m, x in zip(metrics, after, strict=True):
+                if m == Metric.MAKESPAN:
+                    out.append(x + step if ends else x)
+                elif m == Metric.HUMAN_END:
+                    out.append(x + step if ends and (human_acts or x > 0) else x)
+                elif m == Metric.HUMAN_EFFORT:
+                    out.append(x + 1 if is_human and acts else x)
+                elif m == Metric.EFFORT:
+                    out.append(x + 1 if acts else x)
+                else:
+                    out.append(x + 1 if move.kind in COMMUNICATIONS or move.told else x)
+            options.append(tuple(out))
+        vec[n] = min(options) if optimistic else max(options)
+    path_to = paths(rp)
+    for n in sorted(vec, key=lambda i: (len(path_to.get(i, [])), i)):
+        got: Any = vectors[n]
+        if not isinstance(got, list) or len(got) != len(metrics) \
+                or any(not _same(g, w) for g, w in zip(got, vec[n], strict=True)):
+            rp.fail(path_to.get(n, []), f"node {n} ({reached_by(rp, n)}): its recorded "
+                    f"{'/'.join(names)} are {got}, but its "
+                    f"{'best' if optimistic else 'worst'} branch's are "
+                    "[" + ", ".join(_num(x) for x in vec[n]) + "] (C11)")
+            return
+    if obj.get("value") != vectors[0]:
+        rp.fail([], f"policy objective value is {obj.get('value')}, but the root's vector is "
+                f"{vectors[0]} (C11)")
 
 
 def reached_by(rp: Replay, n: int) -> str:

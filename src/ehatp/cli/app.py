@@ -71,6 +71,9 @@ COMMANDS: dict[str, Entry] = {
     "export": Entry("export", "Write a policy in another tool's format."),
     "expand": Entry("expand", "Write the version 2 graph, over the real objects, of a lifted "
                               "policy (format version 3)."),
+    "relabel": Entry("relabel", "Search a preferences problem once and write the policy each "
+                                "profile prefers, by relabelling the explored graph (no new "
+                                "search per profile)."),
 }
 
 

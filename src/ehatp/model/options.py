@@ -8,7 +8,7 @@ Reading them from TOML is here too, so the problem loader stays one table per co
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import StrEnum
 from fractions import Fraction
 from typing import Any, Protocol
@@ -85,6 +85,26 @@ class ObjectiveKind(StrEnum):
 
     WORST_CASE = "worst-case"
     EXPECTED = "expected"
+    PREFERENCES = "preferences"  # C11: a named lexicographic profile (joint steps only)
+
+
+class Metric(StrEnum):
+    """A per-branch metric a preference profile orders (C11, docs/concurrent.md
+    "Preferences")."""
+
+    MAKESPAN = "makespan"  # the steps' cost ([steps] cost each)
+    HUMAN_END = "human_end"  # steps until the human's last action ([steps] cost each)
+    HUMAN_EFFORT = "human_effort"  # steps in which the human acts (an action of its model)
+    EFFORT = "effort"  # actions of both agents
+    COMMUNICATIONS = "communications"  # inform and ask moves
+
+
+class Estimate(StrEnum):
+    """How a preference profile aggregates the human's branches (C11)."""
+
+    WORST_CASE = "worst-case"  # the lexicographically worst branch (the default)
+    OPTIMISTIC = "optimistic"  # the best branch: the authors' best-pair value
+
 
 
 # the keys of each options table, for the loader's checks
@@ -93,7 +113,7 @@ OPTION_KEYS: dict[str, frozenset[str]] = {
     "human": frozenset({"passes", "passes_when_blocked", "anticipates", "intentions"}),
     "communication": frozenset({"inform", "speech", "relevance", "ask", "inform_max_atoms",
                                 "plan_horizon", "robot_asks", "announce"}),
-    "objective": frozenset({"kind", "weights", "ties"}),
+    "objective": frozenset({"kind", "weights", "ties", "profile", "profiles", "estimate"}),
     "steps": frozenset({"mode", "first", "witness", "commute", "cost"}),
 }
 
@@ -164,6 +184,24 @@ class Objective:
     # relative weights of human moves for "expected", keyed by move label or action name
     weights: Mapping[str, Fraction] = field(default_factory=dict)
     ties: tuple[TieKey, ...] = DEFAULT_TIES
+    # kind = "preferences" (C11): the chosen profile, every named profile, the aggregation
+    profile: str = ""
+    profiles: Mapping[str, tuple[Metric, ...]] = field(default_factory=dict)
+    estimate: Estimate = Estimate.WORST_CASE
+
+    @property
+    def metrics(self) -> tuple[Metric, ...]:
+        """C11: the chosen profile's metrics, most important first (empty unless
+        ``kind = "preferences"``)."""
+        return tuple(self.profiles.get(self.profile, ()))
+
+    def with_profile(self, name: str) -> Objective:
+        """This objective with another of its named profiles chosen (relabelling, C11);
+        :class:`KeyError` naming the known ones when ``name`` is not one."""
+        if name not in self.profiles:
+            raise KeyError(f"no profile {name!r}: the problem names "
+                           + (", ".join(sorted(self.profiles)) or "none"))
+        return replace(self, profile=name)
 
     def weight(self, label: str, name: str) -> Fraction:
         """A human move's relative weight: by its label, else its action name, else 1."""
@@ -256,10 +294,54 @@ def read_options(r: _Reader, data: Mapping[str, Any]
         raise r.err("[objective] ties", f"bad tie-breaks {ties!r}",
                     "give distinct names from " + ", ".join(f'"{t}"' for t in TIE_KEYS),
                     "ties")
-    objective = Objective(_choice(r, "objective", o, "kind", ObjectiveKind,
-                                  ObjectiveKind.WORST_CASE), weights,
-                          tuple(TieKey(t) for t in ties))
+    kind = _choice(r, "objective", o, "kind", ObjectiveKind, ObjectiveKind.WORST_CASE)
+    objective = Objective(kind, weights, tuple(TieKey(t) for t in ties),
+                          *_read_profiles(r, data, o, kind))
     return human, comm, objective, tuple(notes)
+
+
+def _read_profiles(r: _Reader, data: Mapping[str, Any], o: Mapping[str, Any],
+                   kind: ObjectiveKind
+                   ) -> tuple[str, dict[str, tuple[Metric, ...]], Estimate]:
+    """C11: ``[objective] profile``, ``estimate`` and ``[objective.profiles]`` (each a list of
+    distinct metric names); only with ``kind = "preferences"``, which needs joint steps."""
+    if kind != ObjectiveKind.PREFERENCES:
+        for key in ("profile", "profiles", "estimate"):
+            if key in o:
+                raise r.err(f"[objective] {key}", f'{key} is read only with kind = '
+                            '"preferences"', 'write kind = "preferences", or leave '
+                            f"{key} out", key)
+        return "", {}, Estimate.WORST_CASE
+    steps = data.get("steps", {})
+    if not isinstance(steps, dict) or steps.get("mode") != "concurrent":
+        raise r.err("[objective] kind", 'preference profiles are built for joint steps only',
+                    'add [steps] mode = "concurrent", or use kind = "worst-case"', "kind")
+    table = o.get("profiles", {})
+    if not isinstance(table, dict) or not table:
+        raise r.err("[objective] profiles", "no profiles given",
+                    'write [objective.profiles] with e.g. hurry = ["makespan", '
+                    '"communications"]', "profiles")
+    names = [m.value for m in Metric]
+    profiles: dict[str, tuple[Metric, ...]] = {}
+    for name, ms in table.items():
+        if (not isinstance(ms, list) or not ms or not all(isinstance(m, str) for m in ms)
+                or len(set(ms)) != len(ms)):
+            raise r.err(f"[objective.profiles] {name}", f"expected a list of distinct metric "
+                        f"names, got {ms!r}", 'write e.g. ["makespan", "communications"]',
+                        name)
+        for m in ms:
+            if m not in names:
+                raise r.err(f"[objective.profiles] {name}", f"unknown metric {m!r} (metrics "
+                            "a domain declares are not built)",
+                            "use " + ", ".join(f'"{x}"' for x in names), m)
+        profiles[name] = tuple(Metric(m) for m in ms)
+    profile = o.get("profile")
+    if not isinstance(profile, str) or profile not in profiles:
+        raise r.err("[objective] profile", f"expected one of the profiles' names, got "
+                    f"{profile!r}", "write e.g. profile = "
+                    + repr(sorted(profiles)[0]).replace("'", '"'), "profile")
+    return profile, profiles, _choice(r, "objective", o, "estimate", Estimate,
+                                      Estimate.WORST_CASE)
 
 
 # [communication] and [problem] settings joint steps do not read (docs/concurrent.md)
@@ -292,7 +374,7 @@ def read_steps(r: _Reader, data: Mapping[str, Any]) -> Steps:
     return steps
 
 
-__all__ = ["DEFAULT_TIES", "OPTION_KEYS", "TIE_KEYS", "Commute", "Communication", "HumanModel",
-           "InformWhere", "Intentions", "Objective", "ObjectiveKind", "Passes", "Relevance",
-           "Speech", "StepFirst", "StepMode", "Steps", "TieKey", "Witness", "read_options",
-           "read_steps"]
+__all__ = ["DEFAULT_TIES", "OPTION_KEYS", "TIE_KEYS", "Commute", "Communication", "Estimate",
+           "HumanModel", "InformWhere", "Intentions", "Metric", "Objective", "ObjectiveKind",
+           "Passes", "Relevance", "Speech", "StepFirst", "StepMode", "Steps", "TieKey",
+           "Witness", "read_options", "read_steps"]

@@ -5,10 +5,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from ..errors import InputError
 from ..formats.policy import Policy
 from ..model.grounded import Grounded
 from ..model.grounding import ground_problem
-from ..model.options import Intentions
+from ..model.options import Intentions, ObjectiveKind
 from ..model.problem import Problem
 from . import symmetry as _symmetry
 from .andor import SearchOutcome, search
@@ -16,6 +17,7 @@ from .diagnose import diagnose
 from .limits import LIMITS, Budget, LimitReached, SolveStatus, start_budget
 from .policy import explain_failure, extract, liftable, realise
 from .stats import Progress, SolveStats, Stats
+from .values import compute_values
 
 INF = float("inf")
 
@@ -35,6 +37,8 @@ class Result:
     # the lifted policy (format version 3) when ``policy`` is its expansion (``expand``): what
     # a writer stopped by a limit can still write, small as the search
     lifted: Policy | None = None
+    # solve(..., keep_graph=True): the explored graph, to relabel for another profile (C11)
+    graph: Relabeler | None = None
 
     @property
     def solved(self) -> bool:
@@ -48,6 +52,46 @@ class Result:
         why = f", reason={self.reason!r:.80}" if self.reason else ""
         return (f"Result(status={str(self.status)!r}, optimal={self.optimal}, "
                 f"policy={self.policy!r}{size}{took}{why})")
+
+
+@dataclass
+class Relabeler:
+    """C11: a solved problem's explored graph, kept (``solve(..., keep_graph=True)``) so that
+    another of the problem's preference profiles relabels it without a new search: the values
+    are computed again for that profile and its policy extracted, exactly the policy a fresh
+    solve with that profile chosen writes (a preferences search explores the whole reachable
+    graph whatever the profile, so the graph is the same)."""
+
+    problem: Problem
+    outcome: SearchOutcome
+    stats: dict[str, Any]  # the policy file's statistics (the search's, without the time)
+
+    @property
+    def profiles(self) -> list[str]:
+        """The problem's profile names, sorted."""
+        return sorted(self.problem.objective.profiles)
+
+    def relabel(self, profile: str) -> Policy:
+        """Return the policy optimal for ``profile`` (one of the problem's
+        ``[objective.profiles]``; :class:`KeyError` otherwise) on the kept graph."""
+        obj = self.problem.objective.with_profile(profile)
+        out = self.outcome
+        assert out.values is not None
+        values = compute_values(out.graph, out.root, obj)
+        if values.value[out.root] == INF:
+            raise ValueError("the kept graph has no policy")
+        optimal = values.exact and (out.optimal or not out.values.exact)
+        return extract(out.graph, out.root, values, problem_name=self.problem.name,
+                       optimal=optimal, stats=self.stats, objective=obj)
+
+
+def relabel(result: Result, profile: str) -> Policy:
+    """C11: ``result``'s kept graph (``solve(..., keep_graph=True)``) relabelled for another
+    ``profile``: the policy a fresh solve with that profile gives."""
+    if result.graph is None:
+        raise ValueError("no graph kept: solve with keep_graph=True "
+                         '(and [objective] kind = "preferences")')
+    return result.graph.relabel(profile)
 
 
 @dataclass(frozen=True)
@@ -66,7 +110,7 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
           max_depth: int | None = None, progress: Progress | None = None,
           max_memory: int | None = None, budget: Budget | None = None,
           symmetry: bool | None = None, heuristic: bool | None = None,
-          expand: bool = False) -> Result:
+          expand: bool = False, keep_graph: bool = False) -> Result:
     """Plan a robot policy for ``problem``, optimal under ``problem.objective``
     (docs/semantics.md §7: worst-case by default, or expected cost).
 
@@ -88,10 +132,21 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
     on) orders a worst-case search by a lower bound (:mod:`.heuristic`): fewer states, the
     same policy.
 
+    ``keep_graph`` keeps the explored graph in ``Result.graph`` (a :class:`Relabeler`) when
+    the objective is ``"preferences"`` (C11), to relabel it for another profile.
+
     The steps: ground (:func:`_ground`), search (:func:`_search`), extract the chosen policy
     (:func:`_extract`), then say why there is no policy or why it is not proven optimal
     (:func:`_reason`).
     """
+    if problem.objective.kind == ObjectiveKind.PREFERENCES:  # C11
+        if not problem.steps.concurrent:
+            raise InputError(problem.source, "[objective] kind", "preference profiles are "
+                             "built for joint steps only", 'add [steps] mode = "concurrent"')
+        if problem.objective.profile not in problem.objective.profiles:
+            raise InputError(problem.source, "[objective] profile", "no profile of "
+                             "[objective.profiles] is chosen", "name one in [objective] "
+                             "profile")
     live = Stats()
     budget = start_budget(problem.limits, live, timeout=timeout, max_memory=max_memory,
                           budget=budget, progress=progress)
@@ -137,7 +192,11 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
             _policy_stats(stats, policy)
     reason = _reason(problem, grounded, out, status, reason, optimal, budget, settings)
     budget.phase = "done"
-    return Result(status, policy, stats, reason, optimal, lifted)
+    kept = None
+    if (keep_graph and policy is not None and out.values is not None
+            and problem.objective.kind == ObjectiveKind.PREFERENCES):
+        kept = Relabeler(problem, out, public)
+    return Result(status, policy, stats, reason, optimal, lifted, kept)
 
 
 def _proven(problem: Problem, out: SearchOutcome, public: dict[str, Any]) -> Policy | None:
@@ -269,4 +328,4 @@ def _hidden_choice(problem: Problem, budget: Budget, settings: _Settings) -> str
     return ""
 
 
-__all__ = ["LIMITS", "Result", "solve"]
+__all__ = ["LIMITS", "Relabeler", "Result", "relabel", "solve"]

@@ -19,7 +19,8 @@ from .values import Values, weighted_mean
 
 def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
             optimal: bool = True, stats: dict[str, Any] | None = None,
-            check: Callable[[], None] | None = None) -> Policy:
+            check: Callable[[], None] | None = None,
+            objective: Objective | None = None) -> Policy:
     """Return the policy the values chose, from ``root``, as a graph (docs/policy-format.md):
     one policy node per search node the policy reaches, memoised by search node, so the work
     and the file are linear in the policy's distinct states however many branches share them.
@@ -28,7 +29,10 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
     Both costs of §7 are computed again on the extracted graph: its worst case (the maximum over
     human branches) and its expected cost (their weighted mean, ``[objective.weights]``); each
     node's ``value`` and the policy's ``cost`` are the objective's. Branches and communications
-    are counted over the graph too (:meth:`Policy.count_branches`). ``check`` (e.g. a time
+    are counted over the graph too (:meth:`Policy.count_branches`). ``objective`` (default:
+    the problem's) is the one ``values`` were computed for (C11: relabelling chooses another
+    profile); under ``kind = "preferences"`` the file records the profile and each node's
+    vector of its metrics (``values.vector``). ``check`` (e.g. a time
     limit's, docs/semantics.md §7 "Search") is called once per policy node and may raise to
     stop the work.
 
@@ -55,7 +59,18 @@ def extract(gr: Graph, root: int, values: Values, *, problem_name: str,
         check()
         nodes.append(_policy_node(gr, i, n, [_policy_move(gr, e, index, table)
                                              for e in chosen(n)]))
-    policy = _policy(gr.sem.grounded.problem, problem_name, nodes, optimal, stats or {})
+    p = gr.sem.grounded.problem
+    obj = p.objective if objective is None else objective
+    policy = _policy(replace(p, objective=obj), problem_name, nodes, optimal, stats or {})
+    if obj.kind == ObjectiveKind.PREFERENCES:
+        assert values.vector is not None
+        vectors: list[list[Any]] = []
+        for n in order:
+            v = values.vector[n]
+            assert v is not None  # every node of the chosen policy has its vector
+            vectors.append([num(x) for x in v])
+        policy.objective["vectors"] = vectors
+        policy.objective["value"] = policy.objective["vectors"][0]
     if table is not None:
         policy.symmetry = table.as_dict()
     return policy
@@ -180,9 +195,12 @@ def _policy(p: Problem, problem_name: str, nodes: list[PolicyNode], optimal: boo
     own = mean if obj.kind == ObjectiveKind.EXPECTED else worst
     for x in nodes:
         x.value = own[x.id]
-    objective = {"kind": obj.kind.value,
-                 "weights": {k: num(v) for k, v in sorted(obj.weights.items())},
-                 "ties": [str(t) for t in obj.ties]}
+    objective: dict[str, Any] = {
+        "kind": obj.kind.value, "weights": {k: num(v) for k, v in sorted(obj.weights.items())},
+        "ties": [str(t) for t in obj.ties]}
+    if obj.kind == ObjectiveKind.PREFERENCES:  # C11: the profile; the vectors: see extract
+        objective.update(profile=obj.profile, metrics=[str(m) for m in obj.metrics],
+                         estimate=str(obj.estimate))
     policy = Policy(problem_name, p.domain.name, {"robot": p.domain.robot_name,
                                                   "human": p.domain.human_name}, p.K,
                     costs, nodes, own[0], 0, 0, optimal, stats, list(p.after), objective,

@@ -35,9 +35,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from fractions import Fraction
 
+from ..epistemic.concurrent import H_ACTION
 from ..epistemic.semantics import ACTION, ANNOUNCE, ASK, INFORM, WAIT, Move
-from ..epistemic.state import ROBOT
-from ..model.options import Objective, ObjectiveKind, TieKey
+from ..epistemic.state import HUMAN, ROBOT, EState
+from ..model.options import Estimate, Metric, Objective, ObjectiveKind, TieKey
 from ..model.problem import Cost
 from .graph import GOAL, Edge, Graph
 from .limits import Budget
@@ -54,6 +55,12 @@ class Values:
     choice: dict[int, int]
     worst: list[Cost | float]  # worst-case values (the same list as ``value`` for worst-case)
     exact: bool = True  # False: cycles restricted the expected-cost choices (§7)
+    # kind = "preferences" (C11): each node's vector of the profile's metrics (None: not
+    # reached by the backward pass); ``value`` is then the worst-case cost
+    vector: list[Vector | None] | None = None
+
+
+Vector = tuple[Cost, ...]
 
 
 def compute_values(gr: Graph, root: int, objective: Objective | None = None,
@@ -79,6 +86,11 @@ def compute_values(gr: Graph, root: int, objective: Objective | None = None,
     if budget is not None:
         budget.phase = "values (expected cost)"
     topo, allowed, exact = expected_order(gr, root, worst, pos, budget)
+    if obj.kind == ObjectiveKind.PREFERENCES:
+        if budget is not None:
+            budget.phase = "values (preferences)"
+        choice, vector = prefer(gr, topo, allowed, obj, budget)
+        return Values(worst, _reachable(gr, root, choice), worst, exact, vector)
     choice, mean = _choose(gr, topo, allowed, obj, need_mean, budget)
     value: list[Cost | float] = [INF] * n_nodes
     assert mean is not None
@@ -544,6 +556,80 @@ class _Totals:
             mean[n] = weighted_mean([weight(e.move) for e in edges],
                                     [e.move.cost + mc for e, mc in zip(edges, ms, strict=True)
                                      if mc is not None])
+
+
+def prefer(gr: Graph, order: list[int], allowed: Callable[[int, int], bool], obj: Objective,
+           budget: Budget | None = None) -> tuple[dict[int, int], list[Vector | None]]:
+    """C11, ``kind = "preferences"``: visit ``order`` (:func:`expected_order`: the solvable
+    graph, children first) and give each node the vector of the profile's metrics
+    (:func:`step_metrics`) of its sub-policy: a goal all zeros; a robot node the
+    lexicographically least of its allowed options (a tie: the first in canonical order); a
+    human node the lexicographically greatest of its branches (``estimate = "worst-case"``)
+    or the least (``"optimistic"``, the authors' best-pair value: the policy still covers
+    every branch). Every metric grows along a branch and never lowers a larger value below a
+    smaller one, so the vector of a node is its worst (or best) branch's, and the choice at a
+    robot node is optimal for the profile over the policies the order allows."""
+    metrics = obj.metrics
+    zero: Vector = tuple(0 for _ in metrics)
+    optimistic = obj.estimate == Estimate.OPTIMISTIC
+    vector: list[Vector | None] = [None] * len(gr.states)
+    choice: dict[int, int] = {}
+    status, states = gr.status, gr.states
+    for step, n in enumerate(order):
+        if budget is not None and not step & CHECK_EVERY:
+            budget.check()
+        if status[n] == GOAL:
+            vector[n] = zero
+            continue
+        es = states[n]
+        best: Vector | None = None
+        best_i = -1
+        robot = es.turn == ROBOT
+        for i, e in enumerate(gr.edges[n]):
+            c = e.child
+            vc = vector[c] if c >= 0 else None
+            if robot and (vc is None or not allowed(n, c)):
+                continue
+            assert vc is not None  # a human node's branches are all solvable, done first
+            v = step_metrics(gr, es, e.move, metrics, vc)
+            if best is None or (v < best if robot or optimistic else v > best):
+                best, best_i = v, i
+        assert best is not None
+        vector[n] = best
+        if robot:
+            choice[n] = best_i
+    return choice, vector
+
+
+def step_metrics(gr: Graph, es: EState, move: Move, metrics: tuple[Metric, ...],
+                 after: Vector) -> Vector:
+    """C11: the profile's metrics from node ``es`` through ``move``, given ``after`` (those
+    of the move's child). A move ends a step when it is the reply (the agent who does not
+    decide first, C4) or a question (a whole step); the step adds ``[steps] cost`` to
+    ``makespan``; ``human_end`` (the steps until the human's last action) adds it when the
+    human acts in that step (its move, or with the human first the move the reply node holds
+    pending) or acts later; ``human_effort`` counts the human's actions (one a step),
+    ``effort`` both agents' actions, ``communications`` inform and ask moves."""
+    sem = gr.sem
+    step = sem.grounded.problem.steps
+    first = ROBOT if step.first.value == "robot" else HUMAN
+    ends = move.kind == ASK or move.agent != first
+    human = move.agent == HUMAN
+    acts = move.kind == ACTION
+    out: list[Cost] = []
+    for m, x in zip(metrics, after, strict=True):
+        if m == Metric.MAKESPAN:
+            out.append(x + step.cost if ends else x)
+        elif m == Metric.HUMAN_END:
+            human_acts = (acts if human else bool(es.pending) and es.pending[0] == H_ACTION)
+            out.append(x + step.cost if ends and (human_acts or x > 0) else x)
+        elif m == Metric.HUMAN_EFFORT:
+            out.append(x + 1 if human and acts else x)
+        elif m == Metric.EFFORT:
+            out.append(x + 1 if acts else x)
+        else:  # communications
+            out.append(x + 1 if speaks(move) else x)
+    return tuple(out)
 
 
 def weighted_mean(weights: list[Fraction], xs: list[Cost]) -> Cost:
