@@ -286,3 +286,23 @@ def test_table1_in_joint_steps_relabels_exactly(name: str) -> None:
         assert got["hurry", "worst-case"] == [6, 0] and got["hurry", "optimistic"] == [4, 0]
         assert got["lazy_human", "worst-case"] == [4, 6]
         assert got["lazy_human", "optimistic"] == [4, 4]
+
+
+def test_relabel_command_mistakes_are_one_line(tmp_path: Path) -> None:
+    """``ehatp relabel``: an unknown profile, several profiles with one ``--out`` file, a
+    problem without preferences: one line each, exit 2, nothing written."""
+    from typer.testing import CliRunner
+
+    from ehatp.cli.app import app
+
+    f = p2(tmp_path)
+    runner = CliRunner()
+    for args, says in (
+            (["--profile", "slow", "--out", "x.json"], "no profile 'slow'"),
+            (["--profile", "hurry", "--profile", "early", "--out", "x.json"], "{profile}")):
+        r = runner.invoke(app, ["relabel", str(f), *args])
+        assert r.exit_code == 2 and says in r.stderr and r.stderr.count("\n") == 1, r.output
+    r = runner.invoke(app, ["relabel", str(EXAMPLES / "cubes" / "p2.toml"), "--profile", "a",
+                            "--out", str(tmp_path / "x.json")])
+    assert r.exit_code == 2 and 'kind = "preferences"' in r.stderr
+    assert not (tmp_path / "x.json").exists()
