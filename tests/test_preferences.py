@@ -306,3 +306,17 @@ def test_relabel_command_mistakes_are_one_line(tmp_path: Path) -> None:
                             "--out", str(tmp_path / "x.json")])
     assert r.exit_code == 2 and 'kind = "preferences"' in r.stderr
     assert not (tmp_path / "x.json").exists()
+
+
+def test_e2_with_the_robot_first() -> None:
+    """E2 with ``[steps] first = "robot"`` (C4) by hand. The robot decides first: ``pick(c)``
+    — the human, who saw it start, cannot pick too and may not wait idle beside it, so it
+    passes; then (place(c), pass): 2 steps, human_effort 0, human_end 0; or ``wait`` — beside
+    a wait the human may not pass, so it picks, then places: 2 steps, human_effort 2.
+    ``lazy_human`` (human_effort, makespan): pick, (0, 2); ``end`` (human_end, makespan):
+    pick, (0, 2); ``hurry`` (makespan, human_effort): pick, (2, 0)."""
+    first = dataclasses.replace(JOINT, first=ehatp.StepFirst.ROBOT)
+    for profile, value in (("lazy_human", [0, 2]), ("end", [0, 2]), ("hurry", [2, 0])):
+        policy, got = run(prefer(two_hands(first), profile))
+        assert got == value
+        assert policy.root.moves[0].action == "pick(c)"
