@@ -80,6 +80,8 @@ EXAMPLES: tuple[Example, ...] = (
     Example("communication/late-fatal", 8, 1, 3, 1),
     Example("communication/other-room", 3, 1, 1, 1),
     Example("communication/starts-on-false-belief", 6, 1, 3, 1),
+    Example("concurrent/stack10", 20, 0, 960, 1),  # joint steps: docs/domains/stacking.md
+    Example("concurrent/stack4", 8, 0, 18, 1),  # tests/test_stacking.py derives it
     # Cooking: 2h + 9 with h = 5, 6, 7 human actions (tests/test_cooking.py derives it)
     Example("cooking/cooking1", 19, 0, 12, 4, _t1("Cooking 1", 2, 256, 175, (603, 3, 5))),
     Example("cooking/cooking2", 21, 0, 10, 5, _t1("Cooking 2", 3, 300, 212, (1054, 4, 5))),

@@ -6,7 +6,7 @@ domain. A domain declares itself in one of two ways:
 
 - an installed package lists it in the entry-point group ``ehatp.domains`` (``pyproject.toml``:
   ``[project.entry-points."ehatp.domains"] kitchen = "my_pkg.domains:make_kitchen"``); ehatp's
-  own ``cubes`` and ``cooking`` are declared so;
+  own ``cubes``, ``cooking`` and ``stacking`` are declared so;
 - a Python program calls :func:`register` (``ehatp.domains.register("kitchen", make_kitchen)``)
   before it loads the problems that name it.
 
@@ -27,6 +27,7 @@ GROUP = "ehatp.domains"
 BUILTIN: dict[str, str] = {
     "cubes": "ehatp.domains.cubes:make_domain",
     "cooking": "ehatp.domains.cooking:make_domain",
+    "stacking": "ehatp.domains.stacking:make_domain",
 }
 
 # name -> "module:attribute", a Domain or a function that returns one; filled by register()
