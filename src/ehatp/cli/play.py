@@ -38,6 +38,11 @@ def play_cmd(
         "or none (facts only); default: the domain's own hook, if any.", show_default=False),
     robot_delay: float = typer.Option(0.8, "--robot-delay", min=0.0,
                                       help="Seconds between the robot's moves on the page."),
+    decision_timeout: float | None = typer.Option(
+        None, "--decision-timeout", min=0.1, metavar="SECONDS",
+        help="Joint steps: the seconds the participant has to decide at each step where the "
+        "human may pass; when they run out, the human passes (default: no timer).",
+        show_default=False),
     no_browser: bool = typer.Option(False, "--no-browser", help="Do not open a browser."),
     replay_log: Path | None = typer.Option(
         None, "--replay", metavar="LOG", help="Replay a session's log instead: print it, "
@@ -69,7 +74,8 @@ def play_cmd(
         from ..play.files import session_log
 
         return PlaySession(setup.problem, setup.policy, setup.source, session_id=sid,
-                           log=session_log(folder, sid), view=setup.view)
+                           log=session_log(folder, sid), view=setup.view,
+                           decision_timeout=decision_timeout)
 
     hub = Hub(factory, robot_delay=robot_delay)
     try:

@@ -6,7 +6,8 @@ Routes (docs/play.md):
   tab, each with its own log, isolated from the others;
 - ``GET /s/<id>`` the participant's page; ``WS /ws/<id>`` its socket: the server sends the
   participant's view (``{"type": "view", "view": {...}}``, the human's perspective only), the
-  page sends the participant's moves (``{"move": LABEL}``);
+  page sends the participant's moves (``{"move": LABEL}``), and in joint steps a decision whose
+  timer ran out (``{"timeout": STEP}``, STEP the moves played when it started: a ``pass``);
 - ``GET /experimenter?key=K`` the sessions; ``GET /experimenter/<id>?key=K`` one session as the
   experimenter sees it, ``WS /ws/<id>/experimenter?key=K`` its socket. ``K`` is made when the
   server starts and printed with the URLs: a participant cannot open these pages.
@@ -102,6 +103,12 @@ class Hub:
             await self.push(live)
             await self.robot(live)
 
+    async def timeout(self, live: Live, step: int) -> None:
+        async with live.lock:
+            await anyio.to_thread.run_sync(live.session.timeout, step)
+            await self.push(live)
+            await self.robot(live)
+
     async def advance(self, live: Live) -> None:
         async with live.lock:
             await self.robot(live)
@@ -186,6 +193,10 @@ def make_app(hub: Hub) -> Starlette:
                 text = await ws.receive_text()
                 label = _move(text)
                 if label is None:
+                    step = _timeout(text)
+                    if step is not None:
+                        await hub.timeout(live, step)
+                        continue
                     await ws.send_text(json.dumps({"type": "error",
                                                    "message": 'send {"move": LABEL}'}))
                     continue
@@ -243,6 +254,20 @@ def _move(text: str) -> str | None:
     if not isinstance(msg, dict) or set(msg) != {"move"} or not isinstance(msg["move"], str):
         return None
     return msg["move"]
+
+
+def _timeout(text: str) -> int | None:
+    """Return the step a participant's ``{"timeout": STEP}`` names, None for anything else."""
+    if len(text) > MAX_MESSAGE:
+        return None
+    try:
+        msg = json.loads(text)
+    except (json.JSONDecodeError, RecursionError):
+        return None
+    if not isinstance(msg, dict) or set(msg) != {"timeout"}:
+        return None
+    step = msg["timeout"]
+    return step if isinstance(step, int) and not isinstance(step, bool) else None
 
 
 def listen(host: str, port: int) -> socket.socket:

@@ -44,6 +44,7 @@ from ..epistemic.semantics import (
 from ..epistemic.state import states_of
 from ..errors import ExecutionError, InputError, UncoveredHumanAction
 from ..formats.policy import Policy, label_key, num
+from ..model.options import StepFirst
 from ..model.problem import Problem, call_str
 from ..model.vocabulary import HUMAN
 from ..run.execute import beliefs
@@ -51,6 +52,9 @@ from ..run.executor import Executor, Step
 from .views import Perspective, Scene, Unsure, ViewHook, check_scene, predicate_of
 
 LOG_TAIL = 200  # the records an experimenter view carries
+# what the robot signals at the start of a joint step (docs/play.md, "Joint steps"), by key
+SIGNALS = {"parallel": "You can act in parallel", "act": "Act if you will",
+           "passive": "I will be passive this step"}
 IGNORED_IN_REPLAY = ("t", "session")  # what differs between a session and its replay
 NOT_REPLAYED = ("connection",)  # records of the browser, not of the play
 
@@ -194,6 +198,33 @@ def move_text(m: Move, label: str, robot: str) -> str:
     return label
 
 
+def robot_signal(ex: Executor) -> str | None:
+    """Return the key of :data:`SIGNALS` the robot shows at the start of a joint step where the
+    human decides first (None elsewhere: turns, the robot first, the opening, the robot to
+    move, done), derived from the policy's replies at the node (docs/concurrent.md, C4):
+
+    - ``parallel``: the robot acts beside some action of the human (a reply that is an action
+      to a human move that is not ``pass``);
+    - ``act``: otherwise, the robot acts only if the human passes (it yields to any action);
+    - ``passive``: every reply is ``wait`` (the robot will not act this step)."""
+    st = ex.problem.steps
+    if (not st.concurrent or st.first != StepFirst.HUMAN or ex.node is None
+            or ex.done or ex.state.turn != HUMAN):
+        return None
+    beside = after_pass = False
+    for a in ex.expected_human_actions():
+        other = ex.copy()
+        other.observe_human_action(a)
+        reply = other.next_robot_action()
+        if reply is None or reply.kind != ACTION:
+            continue
+        if a.kind == PASS:
+            after_pass = True
+        else:
+            beside = True
+    return "parallel" if beside else "act" if after_pass else "passive"
+
+
 # --- a session ---------------------------------------------------------------------------------
 
 
@@ -224,11 +255,17 @@ class Source:
 class PlaySession:
     """One participant playing the human of ``problem`` against ``policy``; every record
     goes to ``log``. Call :meth:`start` first, then :meth:`robot_step` while
-    :attr:`robot_to_move`, and :meth:`choose` with the participant's moves."""
+    :attr:`robot_to_move`, and :meth:`choose` with the participant's moves.
+    ``decision_timeout`` (seconds; joint steps only): the participant's page counts it down at
+    each decision where the human may pass, and :meth:`timeout` plays ``pass`` when it ends."""
 
     def __init__(self, problem: Problem, policy: Policy, source: Source, *, session_id: str,
                  log: Log, view: ViewHook | None = None,
-                 clock: Callable[[], str] = now) -> None:
+                 clock: Callable[[], str] = now, decision_timeout: float | None = None) -> None:
+        if decision_timeout is not None and not decision_timeout > 0:
+            raise ValueError(f"decision_timeout is a number of seconds above 0, "
+                             f"got {decision_timeout!r}")
+        self.decision_timeout = decision_timeout if problem.steps.concurrent else None
         self.ex = Executor(problem, policy)
         self.problem, self.policy = problem, policy  # as given: a replan changes the executor's
         self.source, self.id, self.log, self.view, self.clock = source, session_id, log, view, clock
@@ -292,7 +329,9 @@ class PlaySession:
                     problem_hash=src.problem_hash, policy_file=src.policy_file,
                     policy_hash=src.policy_hash, policy_cost=num(ex.policy.cost),
                     policy_nodes=len(ex.policy.nodes), human=ex.human_name,
-                    robot=ex.robot_name, task=self.task, view=src.view, **src.extra)
+                    robot=ex.robot_name, task=self.task, view=src.view, **src.extra,
+                    **({"decision_timeout": self.decision_timeout}
+                       if ex.problem.steps.concurrent else {}))
         self.started = True
         for step in ex.replay_opening():
             self._stepped(step, covered=True)
@@ -314,11 +353,29 @@ class PlaySession:
         while self.robot_step() is not None:
             pass
 
-    def choose(self, label: str) -> str:
+    def timed_pass(self) -> str | None:
+        """The label of the ``pass`` a decision timeout would play now (None: no timer now --
+        not joint steps, no timeout set, not the participant's decision, or it may not pass)."""
+        if self.decision_timeout is None or not self.human_to_move:
+            return None
+        return next((m.label for m in self.ex.legal_human_moves() if m.kind == PASS), None)
+
+    def timeout(self, step: int) -> str:
+        """The participant's decision at ``step`` (moves played so far) timed out: play
+        ``pass`` as :meth:`choose` does and return what it returns; ``stale`` (nothing
+        logged, nothing changes) when the decision at ``step`` is not the current one or has
+        no timer."""
+        label = self.timed_pass()
+        if label is None or step != len(self.ex.history):
+            return "stale"
+        self.record("timeout", step=step, seconds=self.decision_timeout)
+        return self.choose(label, timeout=True)
+
+    def choose(self, label: str, *, timeout: bool = False) -> str:
         """Play the participant's move ``label`` (one of :meth:`moves`); return ``played``,
         ``replanned``, ``failed``, ``no-policy`` or ``rejected`` (not a move of the human now:
-        nothing changes)."""
-        self.record("choice", move=label)
+        nothing changes). ``timeout``: the move is a timed-out decision's ``pass``."""
+        self.record("choice", move=label, **({"timeout": True} if timeout else {}))
         ex = self.ex
         if not self.human_to_move:
             self.record("rejected", move=label, reason="it is not the participant's turn")
@@ -424,10 +481,14 @@ class PlaySession:
             self._end("goal" if ex.goal_reached else "dead-end")
         elif ex.state.turn == HUMAN:
             expected = {label_key(a.label) for a in ex.expected_human_actions()}
+            joint: dict[str, Any] = {}
+            if ex.problem.steps.concurrent:  # turns' records stay as they were
+                joint = {"signal": robot_signal(ex),
+                         "timeout": self.decision_timeout if self.timed_pass() else None}
             self.record("offer", step=len(ex.history),
                         moves=[m.label for m in ex.legal_human_moves()],
                         covered=[m.label for m in ex.legal_human_moves()
-                                 if label_key(m.label) in expected])
+                                 if label_key(m.label) in expected], **joint)
 
     def _end(self, outcome: str, **fields: Any) -> None:
         ex = self.ex
@@ -473,7 +534,17 @@ class PlaySession:
                 "unsure": [{"predicate": predicate_of(u.name), "name": u.name,
                             "options": list(u.options)} for u in p.unsure],
                 "robot_tasks": self._robot_tasks(), "scene": self.scene(p),
-                "feed": [e.to_dict() for e in self.feed], "moves": self.moves()}
+                "feed": [e.to_dict() for e in self.feed], "moves": self.moves(),
+                **self._joint_view()}
+
+    def _joint_view(self) -> dict[str, Any]:
+        """Joint steps only: the robot's signal at the participant's decision (its key and
+        text; None elsewhere) and the decision's timer (seconds; None: no timer now)."""
+        if not self.ex.problem.steps.concurrent:
+            return {}
+        key = robot_signal(self.ex) if self.human_to_move else None
+        return {"signal": None if key is None else {"key": key, "text": SIGNALS[key]},
+                "timer": self.decision_timeout if self.timed_pass() else None}
 
     def experimenter_view(self) -> dict[str, Any]:
         """Return what the experimenter's page shows: the truth, the policy node, the human's
@@ -593,6 +664,8 @@ def timeline(records: Iterable[dict[str, Any]]) -> list[str]:
         elif kind == "replan":
             out.append(f"   replan after {r.get('move')}: {r.get('status')}, cost "
                        f"{r.get('cost')}, {r.get('nodes')} nodes")
+        elif kind == "timeout":
+            out.append(f"   the decision timed out after {r.get('seconds')} s: pass")
         elif kind == "rejected":
             out.append(f"   rejected {r.get('move')}: {r.get('reason')}")
         elif kind == "end":
@@ -609,12 +682,17 @@ def replay(records: list[dict[str, Any]], problem: Problem, policy: Policy, sour
     start = records[0]
     source = dataclasses.replace(source, view=str(start.get("view", source.view)))
     log = MemoryLog()
+    timeout = start.get("decision_timeout")
     session = PlaySession(problem, policy, source, session_id=str(start.get("session", "")),
-                          log=log, view=view)
+                          log=log, view=view,
+                          decision_timeout=float(timeout) if timeout is not None else None)
     session.start()
     session.run_robot()
     for r in records:
-        if r["type"] == "choice":
+        if r["type"] == "timeout":
+            session.timeout(int(r.get("step", -1)))
+            session.run_robot()
+        elif r["type"] == "choice" and not r.get("timeout"):  # a timeout's is replayed above
             session.choose(str(r.get("move", "")))
             session.run_robot()
     want, got = comparable(records), comparable(log.records)
@@ -631,4 +709,4 @@ def replay(records: list[dict[str, Any]], problem: Problem, policy: Policy, sour
 
 __all__ = ["FeedEntry", "FileLog", "Log", "MemoryLog", "PlaySession", "ReplayReport",
            "Source", "comparable", "fixed_facts", "grouped", "perspective", "policy_hash",
-           "read_log", "replay", "sha256", "timeline"]
+           "SIGNALS", "read_log", "replay", "robot_signal", "sha256", "timeline"]

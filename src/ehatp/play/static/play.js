@@ -75,6 +75,7 @@ let socket = null;
 
 function send(label) {
   if (socket && socket.readyState === WebSocket.OPEN) {
+    stopTimer();
     for (const b of document.querySelectorAll("#moves button")) b.disabled = true;
     socket.send(JSON.stringify({move: label}));
   }
@@ -86,6 +87,42 @@ const STATUS = {
   "goal": "Done: the task is complete. Thank you!",
   "over": "The session is over. Thank you!",
 };
+
+// Joint steps: the decision's timer. When it runs out the page tells the server, which plays
+// "pass" for the decision it started at (a late message for an older decision is ignored).
+let timer = null;
+
+function stopTimer() {
+  if (timer !== null) { clearInterval(timer); timer = null; }
+}
+
+let timerStep = null;
+
+function startTimer(view) {
+  const box = document.getElementById("timer");
+  const timed = Boolean(view.timer) && view.status === "your-turn";
+  if (timed && timer !== null && timerStep === view.step) return;  // the same decision
+  stopTimer();
+  box.hidden = !timed;
+  if (!timed) return;
+  timerStep = view.step;
+  const end = Date.now() + view.timer * 1000;
+  const step = view.step;
+  const tick = () => {
+    const left = Math.max(0, Math.ceil((end - Date.now()) / 1000));
+    box.textContent = "Time to decide: " + left + " s (then you wait this step)";
+    box.dataset.left = String(left);
+    if (Date.now() >= end) {
+      stopTimer();
+      if (socket && socket.readyState === WebSocket.OPEN) {
+        for (const b of document.querySelectorAll("#moves button")) b.disabled = true;
+        socket.send(JSON.stringify({timeout: step}));
+      }
+    }
+  };
+  tick();
+  timer = setInterval(tick, 200);
+}
 
 function draw(view) {
   document.getElementById("who").textContent = "You are " + view.you;
@@ -116,6 +153,11 @@ function draw(view) {
     moves.appendChild(b);
   }
   if (view.moves.length === 0) moves.appendChild(el("p", "none", STATUS[view.status] || ""));
+  const signal = document.getElementById("signal");
+  signal.hidden = !view.signal;
+  signal.textContent = view.signal ? view.robot + " signals: " + view.signal.text : "";
+  signal.dataset.signal = view.signal ? view.signal.key : "";
+  startTimer(view);
   const feed = document.getElementById("feed");
   clear(feed);
   for (const f of view.feed) {
