@@ -320,3 +320,40 @@ def test_e2_with_the_robot_first() -> None:
         policy, got = run(prefer(two_hands(first), profile))
         assert got == value
         assert policy.root.moves[0].action == "pick(c)"
+
+
+def test_random_joint_problems_relabel_exactly_and_validate() -> None:
+    """The agreement benchmark's random problems (``ehatp.experiments.randomgen``) that are in
+    joint steps, seeds 0-599: each under three random profiles of random metrics and a random
+    estimate, solved once, relabelled for each profile: the same JSON as a fresh solve, and
+    valid. (Seeds 0-9,999 the same way, once by hand: 1,165 joint problems, 510 solved, 0
+    invalid, 0 different, 0 crashes.)"""
+    import random
+
+    from ehatp.experiments.randomgen import problem
+
+    solved_n = 0
+    for seed in range(600):
+        p = problem(seed)
+        if not p.steps.concurrent:
+            continue
+        rng = random.Random(seed)
+        metrics = list(Metric)
+        profiles = {f"p{i}": tuple(rng.sample(metrics, rng.randint(1, len(metrics))))
+                    for i in range(3)}
+        q = dataclasses.replace(p, objective=Objective(
+            ObjectiveKind.PREFERENCES, profile="p0", profiles=profiles,
+            estimate=rng.choice(list(Estimate))))
+        kept = ehatp.solve(q, keep_graph=True, max_states=20000)
+        if kept.policy is None:
+            continue
+        solved_n += 1
+        for name in profiles:
+            mine = dataclasses.replace(q, objective=q.objective.with_profile(name))
+            policy = relabel(kept, name)
+            report = ehatp.validate(mine, policy)
+            assert report.ok, (seed, name, report.message)
+            fresh = ehatp.solve(mine, max_states=20000).policy
+            assert fresh is not None
+            assert "".join(fresh.iter_json()) == "".join(policy.iter_json()), (seed, name)
+    assert solved_n > 10
