@@ -2,7 +2,8 @@
 (where the human asks) and both Sally-Anne examples to the goal; at every step the facts and
 events the page shows are checked against the human's worlds (tests/play_check.py: nothing
 the human cannot perceive); an uncovered move makes the robot replan, which only the
-experimenter's page says; every session's log replays to the same end state."""
+experimenter's page says; every session's log replays to the same end state. In joint steps
+(stack4) the page shows the robot's signal and the decision timer, whose end is a pass."""
 
 from __future__ import annotations
 
@@ -113,5 +114,55 @@ def test_an_uncovered_move_replans_and_only_the_experimenter_page_says_so(
         assert [r["move"] for r in records if r["type"] == "replan"] == ["pass"]
         assert replay(records, live.problem, live.policy, live.source).ok
         # no console errors on either page
+        errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+        assert errors == []
+
+
+def test_joint_steps_a_timed_out_decision_replans_and_the_participant_stacks_to_the_goal(
+        browser: Any, tmp_path: Path) -> None:  # noqa: F811
+    """Stack4 in joint steps, the policy planned for a diligent human (tests/test_play_joint.py):
+    the page shows the robot's signal ("I will be passive this step" at the root, where the
+    policy expects ``pick(c1)`` only) and the decision timer; the participant lets the timer
+    run out (1 s): a pass the policy does not cover, so the robot replans; then it clicks the
+    first move that is not a pass at each decision, the page showing a signal at each, until
+    the tower stands. The log replays."""
+    from selenium.webdriver.common.by import By
+
+    from ehatp.play.files import session_log
+    from ehatp.play.server import Hub
+    from ehatp.play.session import PlaySession, Source, policy_hash
+
+    from .test_play_joint import STACK4, stack4
+
+    problem, policy = stack4(diligent_policy=True)
+    src = Source(str(STACK4), "sha256:test", None, policy_hash(policy), "test")
+
+    def factory(sid: str) -> PlaySession:
+        return PlaySession(problem, policy, src, session_id=sid,
+                           log=session_log(tmp_path, sid), decision_timeout=1.0)
+
+    hub = Hub(factory)
+    signal = "return document.getElementById('signal').textContent"
+    with serving(hub) as address:
+        browser.get(f"http://{address}/")
+        sid = browser.current_url.rstrip("/").split("/")[-1]
+        live = hub.sessions[sid].session
+        page = wait_turn(browser)
+        assert browser.execute_script(signal) == "R signals: I will be passive this step"
+        assert "Time to decide" in browser.execute_script(
+            "return document.getElementById('timer').textContent")
+        page = wait_turn(browser, page["step"])  # the timer ends: the human passes
+        assert live.replans == 1 and page["feed"][0]["text"] == "You wait."
+        shown = []
+        while page["status"] == "your-turn":
+            shown.append(browser.execute_script(signal))
+            move = next(m for m in page["moves"] if m != "pass")
+            browser.find_element(By.CSS_SELECTOR, f'button[data-move="{move}"]').click()
+            page = wait_turn(browser, page["step"])
+        assert page["status"] == "goal" and live.outcome == "goal"
+        assert shown and all(s.startswith("R signals: ") for s in shown)
+        records = read_log(next(tmp_path.glob(f"*-{sid}.jsonl")))
+        assert [r["move"] for r in records if r["type"] == "replan"] == ["pass"]
+        assert replay(records, live.problem, live.policy, live.source).ok
         errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
         assert errors == []
