@@ -119,7 +119,7 @@ def xml_shape(text: str) -> dict[str, list[tuple[Any, ...]]]:
             elif e.tag == "GoalReached":
                 assert i == len(elems) - 1
                 out.append(("goal", int(a["node"])))
-            elif e.tag == "WaitHumanAction":
+            elif e.tag in ("WaitHumanAction", "WaitHumanStart"):  # the latter: joint steps
                 fallback = elems[i + 1]
                 # a choice of one move: the policy goes on after the Fallback, not inside it
                 flat = len(fallback) == 2

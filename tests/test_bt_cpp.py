@@ -164,8 +164,13 @@ def test_the_program_registers_the_nodes_the_tree_nodes_model_declares(tick: Pat
     registered = ET.fromstring(out.stdout).find("TreeNodesModel")
     _, policy = solved_v2("cubes/p2")
     exported = ET.fromstring(bt.to_btcpp(bt.from_policy(policy))).find("TreeNodesModel")
-    assert registered is not None and exported is not None
-    assert ports(registered) == ports(exported)
+    # a joint-step policy's model also declares WaitHumanStart (docs/behaviour-trees.md)
+    _, joint = solved_v2("concurrent/stack4")
+    exported_joint = ET.fromstring(bt.to_btcpp(bt.from_policy(joint))).find("TreeNodesModel")
+    assert registered is not None and exported is not None and exported_joint is not None
+    assert ports(registered) == ports(exported_joint)
+    assert ports(exported_joint) == {**ports(exported), ("Action", "WaitHumanStart"): ports(
+        registered)[("Action", "WaitHumanStart")]}
 
 
 def test_a_300_move_chain_and_150_nested_choices_load_and_tick(tick: Path, tmp_path: Path,

@@ -292,6 +292,8 @@ int main(int argc, char** argv)
   factory.registerNodeType<Say>("Say");
   factory.registerNodeType<Silence>("Silence");
   factory.registerNodeType<WaitHumanAction>("WaitHumanAction");
+  // joint steps: the human's action seen as it starts; the same scripted choice
+  factory.registerNodeType<WaitHumanAction>("WaitHumanStart");
   factory.registerNodeType<HumanDid>("HumanDid");
   factory.registerNodeType<ReportUncovered>("ReportUncovered");
   factory.registerNodeType<GoalReached>("GoalReached");

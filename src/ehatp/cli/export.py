@@ -8,7 +8,14 @@ from pathlib import Path
 import typer
 
 from ..errors import InputError
-from ..formats.bt import BTFormat, answers_of, from_policy, to_btcpp, to_py_trees_source
+from ..formats.bt import (
+    BTFormat,
+    NotExpressible,
+    answers_of,
+    from_policy,
+    to_btcpp,
+    to_py_trees_source,
+)
 from ..formats.policy_check import check_policy_problem, read_policy
 from ..run.expand import expand_policy
 from .common import command_app, load_problem, user_errors, write_output
@@ -45,6 +52,8 @@ def export_bt(
     with user_errors(policy):
         try:
             forest = from_policy(pol, answers)
+        except NotExpressible as e:
+            raise InputError(str(policy), "", str(e), e.fix) from None
         except ValueError as e:
             raise InputError(str(policy), "", str(e), "give a policy written by ehatp solve"
                              ) from None

@@ -15,6 +15,10 @@ The policy is a graph (docs/policy-format.md); the tree follows it from the root
   anything else: ``ReportUncovered`` then ``AlwaysFailure``; when the policy covers one move,
   the rest of the policy follows the ``Fallback`` instead of nesting in it;
 - a goal is ``GoalReached``;
+- in joint steps with the human first (docs/concurrent.md) a step is a human choice whose wait
+  is ``WaitHumanStart`` (the human's action observed as it *starts*; a decision timeout is a
+  ``pass``), then, in the branch of the human's move, the robot's compliant reply; joint steps
+  with the robot first are refused (:class:`NotExpressible`);
 - a node with more than one move into it (a state shared by several paths) becomes a tree of
   its own, defined once and used through ``<SubTree ID="Node_N"/>``; so does a branch below
   ``MAX_NESTED_CHOICES`` nested choices, so that no tree is nested deeper than
@@ -98,6 +102,44 @@ CUSTOM_NODES: tuple[tuple[str, str, str, tuple[Port, ...]], ...] = (
     )),
 )
 CUSTOM_IDS = frozenset(c[1] for c in CUSTOM_NODES)
+# joint steps only (declared in the model of a joint policy's export, after CUSTOM_NODES, so
+# that every turn-taking export stays as it was)
+JOINT_NODES: tuple[tuple[str, str, str, tuple[Port, ...]], ...] = (
+    ("Action", "WaitHumanStart", "Joint steps: runs until the human starts an action, or "
+     "until the decision timeout, which is a pass; then writes the action observed (as the "
+     "policy prints it) to its output port. The robot's reply, in the branch of that action, "
+     "runs while the human acts; the step ends when both are done.", (
+         ("output", "action", "the human's action, e.g. pick(c1) or pass", None),
+         ("input", "expected", "the actions the policy covers here, separated by ';'", None),
+     )),
+)
+JOINT_IDS = frozenset(c[1] for c in JOINT_NODES)
+
+
+class NotExpressible(ValueError):
+    """A policy a behaviour tree of BehaviorTree.CPP v4 or py_trees cannot express: the
+    message says why, ``fix`` what to do."""
+
+    def __init__(self, why: str, fix: str) -> None:
+        super().__init__(why)
+        self.fix = fix
+
+
+def joint(policy: Policy) -> bool:
+    """Whether ``policy`` is one of joint steps (docs/concurrent.md). Raises
+    :class:`NotExpressible` for joint steps with the robot first."""
+    steps = policy.step_options
+    if steps is None or steps.get("mode") != "concurrent":
+        return False
+    if steps.get("first", "human") != "human":
+        raise NotExpressible(
+            'a joint-step policy with the robot first ([steps] first = "robot") has no '
+            "behaviour tree: the robot's action and the human's move run at once and the "
+            "policy branches on the human's move while the robot acts, which neither "
+            "BehaviorTree.CPP's nor py_trees' Parallel can branch on",
+            'plan with [steps] first = "human" (the compliant robot) to export a tree, or '
+            "follow this policy with ehatp execute")
+    return True
 
 
 def shared_nodes(policy: Policy) -> list[int]:
@@ -131,6 +173,7 @@ def from_policy(policy: Policy, answers: dict[tuple[int, str], bool] | None = No
     ``Sequence``. Past ``MAX_NESTED_CHOICES`` nested choices with several moves, a branch goes
     on in a tree of its own, so every tree is at most ``MAX_DEPTH`` elements deep."""
     policy = expanded(policy)
+    wait_human = "WaitHumanStart" if joint(policy) else "WaitHumanAction"
     own = set(shared_nodes(policy))  # the nodes with a tree of their own
     robot = policy.agents["robot"]
     answers = answers or {}
@@ -173,7 +216,7 @@ def from_policy(policy: Policy, answers: dict[tuple[int, str], bool] | None = No
                 BTNode("ReportUncovered", {"observed": key, "expected": expected}),
                 BTNode("AlwaysFailure")]))
             who = node.to_move or node.moves[0].agent
-            out.append(BTNode("WaitHumanAction", {"action": key, "expected": expected}))
+            out.append(BTNode(wait_human, {"action": key, "expected": expected}))
             out.append(BTNode("Fallback", {"name": f"{who}'s choice at node {n}"}, branches,
                               node=n))
             if not flat:
@@ -307,7 +350,7 @@ def to_btcpp(forest: Forest) -> str:
         _write(root, 2, out)
         out.append("  </BehaviorTree>")
     out.append("  <TreeNodesModel>")
-    for kind, nid, desc, ports in CUSTOM_NODES:
+    for kind, nid, desc, ports in CUSTOM_NODES + (JOINT_NODES if joint(p) else ()):
         out.append(f"    <{kind} ID={_attr(nid)}>")
         out.append(f"      {_comment(desc)}")
         for direction, name, pdesc, default in ports:
@@ -402,6 +445,7 @@ def to_py_trees_source(forest: Forest) -> str:
            "from ehatp.formats.bt_py_trees import (",
            "    GoalReached, HumanDid, HumanFn, Interface, OnGoal, OnUncovered, ReportUncovered,",
            "    RobotAction, RobotFn, RobotWait, Say, Silence, SubTree, WaitHumanAction,",
+           *(["    WaitHumanStart,"] if joint(p) else []),
            ")", "",
            "POLICY = {" + ", ".join(f"{_py(k)}: {_py(v)}" for k, v in header.items()) + "}",
            "", "",
@@ -428,7 +472,8 @@ def to_py_trees_source(forest: Forest) -> str:
     return "\n".join(out) + "\n"
 
 
-__all__ = ["BTCPP_MAX_DEPTH", "CUSTOM_IDS", "CUSTOM_NODES", "MAIN_TREE", "MAX_DEPTH",
-           "MAX_NESTED_CHOICES", "BTFormat", "BTNode", "Forest", "Port",
-           "answers_of", "blackboard_key", "build_py_tree", "from_policy", "shared_nodes",
+__all__ = ["BTCPP_MAX_DEPTH", "CUSTOM_IDS", "CUSTOM_NODES", "JOINT_IDS", "JOINT_NODES",
+           "MAIN_TREE", "MAX_DEPTH", "MAX_NESTED_CHOICES", "BTFormat", "BTNode", "Forest",
+           "NotExpressible", "Port",
+           "answers_of", "blackboard_key", "build_py_tree", "from_policy", "joint", "shared_nodes",
            "to_btcpp", "to_py_trees_source", "tree_id"]

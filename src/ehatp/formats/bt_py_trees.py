@@ -182,6 +182,12 @@ class WaitHumanAction(Behaviour):
         return Status.SUCCESS
 
 
+class WaitHumanStart(WaitHumanAction):
+    """Joint steps: runs until ``io.human`` reports the action the human *starts* (or
+    ``pass``, when its decision timed out), then writes it to the blackboard; the robot's reply
+    runs after it while the human acts."""
+
+
 class HumanDid(Behaviour):
     """Succeeds when the human action observed is ``action`` (spaces ignored)."""
 
@@ -273,6 +279,8 @@ def build(forest: Forest, io: Interface) -> Behaviour:
                        a.get("answer"), node.completes, a.get("intention", ""))
         if node.tag == "WaitHumanAction":
             return WaitHumanAction(io, a["action"], a["expected"])
+        if node.tag == "WaitHumanStart":
+            return WaitHumanStart(io, a["action"], a["expected"])
         if node.tag == "HumanDid":
             return HumanDid(io, a["observed"], a["action"])
         if node.tag == "ReportUncovered":
@@ -286,4 +294,4 @@ def build(forest: Forest, io: Interface) -> Behaviour:
 
 __all__ = ["GoalReached", "HumanDid", "HumanFn", "HumanTurn", "Interface", "OnGoal",
            "OnUncovered", "ReportUncovered", "RobotAction", "RobotCommand", "RobotFn",
-           "RobotWait", "Say", "Silence", "SubTree", "WaitHumanAction", "build"]
+           "RobotWait", "Say", "Silence", "SubTree", "WaitHumanAction", "WaitHumanStart", "build"]
