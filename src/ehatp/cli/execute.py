@@ -61,6 +61,14 @@ def execute_cmd(
     max_memory: str | None = typer.Option(
         None, "--max-memory", help="Resident memory each planning may use, e.g. 2G (default: "
         "the problem's limits.max_memory).", show_default=False),
+    decision_timeout: float | None = typer.Option(
+        None, "--decision-timeout", min=0.0, metavar="SECONDS", help="Joint steps: how long "
+        "the human has to start an action before the robot process reports a pass; carried "
+        "in every waiting line (ehatp keeps no clock).", show_default=False),
+    recognition_latency: float | None = typer.Option(
+        None, "--recognition-latency", min=0.0, metavar="SECONDS", help="Joint steps: how "
+        "long after the human's action starts the robot process may report it; carried in "
+        "every waiting line.", show_default=False),
 ) -> None:
     """Execute a policy live: JSON lines on stdin (what the human did, what the robot
     finished) and on stdout (what the robot should do, what the human believes, the goal,
@@ -70,6 +78,12 @@ def execute_cmd(
     2: bad problem or policy."""
     memory = memory_option(max_memory)
     prob = load_problem(problem)
+    if not prob.steps.concurrent and (decision_timeout is not None
+                                      or recognition_latency is not None):
+        with user_errors(problem):
+            raise InputError(str(problem), "", "--decision-timeout and --recognition-latency "
+                             "time joint steps, and this problem takes turns",
+                             'leave them out, or set [steps] mode = "concurrent"')
     if timeout is not None or memory is not None:  # the first planning too (no --policy)
         limits = dataclasses.replace(
             prob.limits, timeout=prob.limits.timeout if timeout is None else timeout,
@@ -95,5 +109,6 @@ def execute_cmd(
             replans_folder(save_replans)  # created, with its parents, if missing
     code = run(ex, sys.stdin, safe_json_lines(sys.stdout), replan=replan,
                source=str(policy) if policy is not None else "solved now",
-               save=save_replans, timeout=timeout, max_memory=memory)
+               save=save_replans, timeout=timeout, max_memory=memory,
+               decision_timeout=decision_timeout, recognition_latency=recognition_latency)
     raise typer.Exit(code)

@@ -77,8 +77,11 @@ class Session:
 
     def __init__(self, ex: Executor, emit: Emit, *, replan: bool,
                  save: Path | None = None, timeout: float | None = None,
-                 max_memory: int | None = None) -> None:
+                 max_memory: int | None = None,
+                 timing: dict[str, float | None] | None = None) -> None:
         self.ex, self.out, self.replan, self.save = ex, emit, replan, save
+        # joint steps: the step's timing the waiting lines carry (docs/execution.md)
+        self.timing = timing or {"decision_timeout": None, "recognition_latency": None}
         # each replan's limits (None: the problem's [limits])
         self.limits: dict[str, Any] = {"timeout": timeout, "max_memory": max_memory}
         self.exit: int | None = None  # set when the session is over
@@ -119,8 +122,12 @@ class Session:
         if action is not None:
             self.emit({"robot": robot_line(action)})
         else:
-            self.emit({"waiting": {"human": ex.human_name,
-                                   "expected": [a.label for a in ex.expected_human_actions()]}})
+            waiting: dict[str, Any] = {
+                "human": ex.human_name,
+                "expected": [a.label for a in ex.expected_human_actions()]}
+            if ex.problem.steps.concurrent:  # turns' lines stay as they were
+                waiting["step"] = dict(self.timing)
+            self.emit({"waiting": waiting})
 
     def error(self, kind: str, message: str, line: int, **extra: Any) -> None:
         self.emit({"error": kind, "message": message, "line": line, **extra})
@@ -403,13 +410,17 @@ class Session:
 
 def run(ex: Executor, stdin: TextIO, emit: Emit, *, replan: bool = False,
         source: str = "solved now", save: Path | None = None, timeout: float | None = None,
-        max_memory: int | None = None) -> int:
+        max_memory: int | None = None, decision_timeout: float | None = None,
+        recognition_latency: float | None = None) -> int:
     """The protocol without the CLI: read ``stdin`` to the goal or its end; returns the exit
     code. ``save``: a folder where each replanned policy is written (``replan-N.json``);
     ``timeout`` (seconds) and ``max_memory`` (bytes): each replan's limits (None: the
-    problem's)."""
+    problem's). ``decision_timeout`` and ``recognition_latency`` (seconds; joint steps): the
+    timing every ``waiting`` line of a joint-step problem carries (docs/execution.md)."""
     session = Session(ex, emit, replan=replan, save=save, timeout=timeout,
-                      max_memory=max_memory)
+                      max_memory=max_memory,
+                      timing={"decision_timeout": decision_timeout,
+                              "recognition_latency": recognition_latency})
     try:
         session.start(source)
     except PolicyMismatch as e:
