@@ -379,3 +379,13 @@ def test_old_names_are_the_new_objects() -> None:
     assert cli.app is app.app and cli.solve is solve.solve  # what tests patch
     assert render.render is new_render.render
     assert (Path(render.__file__).parent / "explorer" / "explorer.html").is_file()
+
+
+def test_no_benchmark_script_shadows_a_standard_library_module() -> None:
+    """A script runs with its own folder first on ``sys.path``: ``benchmarks/concurrent.py``
+    once hid ``concurrent.futures`` from every other script there."""
+    import sys
+
+    scripts = {p.stem for p in (PACKAGE.parent.parent / "benchmarks").glob("*.py")}
+    assert scripts and not scripts & set(sys.stdlib_module_names), scripts & set(
+        sys.stdlib_module_names)

@@ -1,6 +1,6 @@
 """Table 1's nine instances in turns and in joint, compliant steps (docs/concurrent.md).
 
-    .venv/bin/python benchmarks/concurrent.py [--repeat N] [--witness whole|start]
+    .venv/bin/python benchmarks/joint_steps.py [--repeat N] [--witness whole|start]
         [--first human|robot]
 
 For each instance: the turn-taking policy's worst case, communications and |W| beside the
