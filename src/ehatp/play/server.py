@@ -20,10 +20,11 @@ allows the page's own scripts and nothing else.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import secrets
 import socket
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -60,6 +61,22 @@ class Live:
     lock: asyncio.Lock = field(default_factory=asyncio.Lock)
     participants: set[WebSocket] = field(default_factory=set)
     experimenters: set[WebSocket] = field(default_factory=set)
+
+
+@contextlib.contextmanager
+def _connected(live: Live, ws: WebSocket, role: str, group: set[WebSocket]) -> Iterator[None]:
+    """Keep ``ws`` in ``group`` (the session's participants or experimenters) while the body
+    runs, logging the connection's opening and closing as ``role``'s; a page that goes away
+    ends the body quietly."""
+    group.add(ws)
+    live.session.connection("open", role)
+    try:
+        yield
+    except WebSocketDisconnect:
+        pass
+    finally:
+        group.discard(ws)
+        live.session.connection("close", role)
 
 
 class Hub:
@@ -181,9 +198,7 @@ def make_app(hub: Hub) -> Starlette:
             await ws.close(code=1008)
             return
         await ws.accept()
-        live.participants.add(ws)
-        live.session.connection("open", "participant")
-        try:
+        with _connected(live, ws, "participant", live.participants):
             await ws.send_text(json.dumps({"type": "view",
                                            "view": live.session.participant_view()},
                                           ensure_ascii=False))
@@ -201,11 +216,6 @@ def make_app(hub: Hub) -> Starlette:
                                                    "message": 'send {"move": LABEL}'}))
                     continue
                 await hub.move(live, label)
-        except WebSocketDisconnect:
-            pass
-        finally:
-            live.participants.discard(ws)
-            live.session.connection("close", "participant")
 
     async def experimenter_socket(ws: WebSocket) -> None:
         live = hub.sessions.get(ws.path_params["sid"])
@@ -213,19 +223,12 @@ def make_app(hub: Hub) -> Starlette:
             await ws.close(code=1008)
             return
         await ws.accept()
-        live.experimenters.add(ws)
-        live.session.connection("open", "experimenter")
-        try:
+        with _connected(live, ws, "experimenter", live.experimenters):
             await ws.send_text(json.dumps({"type": "experimenter",
                                            "view": live.session.experimenter_view()},
                                           ensure_ascii=False))
             while True:
                 await ws.receive_text()  # the experimenter's page only listens
-        except WebSocketDisconnect:
-            pass
-        finally:
-            live.experimenters.discard(ws)
-            live.session.connection("close", "experimenter")
 
     async def favicon(request: Request) -> Response:
         return Response(status_code=204, headers=HEADERS)
