@@ -413,10 +413,12 @@ class Policy:
         return cls.from_dict(json.loads(Path(path).read_text(encoding="utf-8")))
 
     @classmethod
-    def load(cls, path: str | Path, check: Callable[[], None] | None = None) -> Policy:
+    def load(cls, path: str | Path, check: Callable[[], None] | None = None,
+             inspect: Callable[[Any], None] | None = None) -> Policy:
         """Read a policy file written by ``ehatp solve``, checking its graph; anything else is
-        one :class:`~ehatp.errors.InputError` line naming the file. ``check`` as in
-        :meth:`to_dict`."""
+        one :class:`~ehatp.errors.InputError` line naming the file (``NaN`` and ``Infinity``,
+        which JSON does not allow, included). ``check`` as in :meth:`to_dict`; ``inspect`` is
+        given the parsed JSON before anything reads it (a schema's check, which raises)."""
         name = str(path)
         try:
             text = Path(path).read_text(encoding="utf-8")
@@ -428,11 +430,17 @@ class Policy:
         except UnicodeDecodeError:
             raise InputError(name, "", "not a text file", POLICY_FIX) from None
         try:
-            raw = json.loads(text)
+            raw = json.loads(text, parse_constant=_no_constant)
         except json.JSONDecodeError as e:
             raise InputError(name, f"{e.lineno}:{e.colno}", f"not valid JSON ({e.msg})",
                              POLICY_FIX) from None
+        except ValueError as e:  # NaN, Infinity
+            raise InputError(name, "", str(e), POLICY_FIX) from None
+        except RecursionError:
+            raise InputError(name, "", "nested too deeply for a policy", POLICY_FIX) from None
         _no_control_characters(name, text)
+        if inspect is not None:
+            inspect(raw)
         if not isinstance(raw, dict):
             raise InputError(name, "", "not an ehatp policy (expected a JSON object)",
                              POLICY_FIX)
@@ -557,6 +565,11 @@ def malformed(raw: Any) -> tuple[str, str] | None:
             if not isinstance(m, dict):
                 return f"nodes[{i}].moves[{j}]", f"a move must be an object, got {m!r:.40}"
     return None
+
+
+def _no_constant(name: str) -> Any:
+    """Refuse ``NaN`` and ``Infinity``, which Python's JSON reader would otherwise accept."""
+    raise ValueError(f"{name} is not a number JSON allows")
 
 
 def _checked(xs: list[Any], check: Callable[[], None] | None) -> Iterator[Any]:

@@ -23,18 +23,18 @@ from .schema import mismatch
 
 def read_policy(path: Path | str, *, counts: bool = True,
                 check: Callable[[], None] | None = None) -> Policy:
-    """Read and check a policy file (version 3 or 2; 1 turned into a graph): the JSON against
-    the format's schema first (:func:`check_schema`: nothing reads a field before its shape is
-    known), then :meth:`Policy.load`, then the type of every field the tools read and
+    """Read and check a policy file (version 3 or 2; 1 turned into a graph): parsed once by
+    :meth:`Policy.load`, the JSON is checked against the format's schema before anything reads
+    it (:func:`check_schema`: no field is read before its shape is known), then the type of
+    every field the tools read and
     (``counts``) whether the header's counts and the moves' agents match the graph, so a
     hand-edited or truncated file is one :class:`InputError` line instead of a wrong display
     or a crash. (``validate`` leaves the counts to the validator.) ``check``, e.g. a time
     limit's, is called between the steps and every few hundred nodes, and may raise."""
-    check_schema(path)
     if check is not None:
         check()
     try:
-        policy = Policy.load(path, check)
+        policy = Policy.load(path, check, inspect=lambda raw: check_schema(str(path), raw))
     except (AttributeError, TypeError, KeyError, ValueError, IndexError, RecursionError) as e:
         # the format reader trusts the JSON's shapes; anything it trips on is the file's fault
         place, what = _shape(path) or ("", f"malformed policy ({type(e).__name__}: {e})")
@@ -47,26 +47,11 @@ SCHEMA = "policy.schema.json"
 """The JSON Schema of policy format versions 2 and 3, shipped beside this module."""
 
 
-def _no_constant(name: str) -> Any:
-    raise ValueError(f"{name} is not a number JSON allows")
-
-
-def check_schema(path: Path | str) -> None:
-    """Raise :class:`InputError` unless the file at ``path`` is JSON (``NaN`` and
-    ``Infinity`` refused) whose object matches the policy format's schema (versions 2 and 3;
-    a version 1 file, which the schema does not describe, is left to :meth:`Policy.load`).
-    The error names the first field that does not match, e.g. ``p.json:objective: must be
-    object``. A file that cannot be read or parsed is left to :meth:`Policy.load` too, which
-    says so in its own words."""
-    name = str(path)
-    try:
-        raw = json.loads(Path(path).read_text(encoding="utf-8"), parse_constant=_no_constant)
-    except ValueError as e:
-        if "JSON allows" in str(e):
-            raise InputError(name, "", str(e), POLICY_FIX) from None
-        return
-    except (OSError, RecursionError):
-        return
+def check_schema(name: str, raw: Any) -> None:
+    """Raise :class:`InputError` unless ``raw``, a policy file's parsed JSON, matches the
+    policy format's schema (versions 2 and 3; a version 1 file, which the schema does not
+    describe, is left to :meth:`Policy.load`). The error names the first field that does not
+    match, e.g. ``p.json:objective: must be an object``."""
     if not isinstance(raw, dict) or raw.get("version") not in (2, 3) or isinstance(
             raw.get("version"), bool):
         return
