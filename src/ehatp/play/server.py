@@ -246,30 +246,29 @@ def make_app(hub: Hub) -> Starlette:
     ])
 
 
-def _move(text: str) -> str | None:
-    """Return the move a participant's message names, None when it is not ``{"move": str}``."""
+def _field(text: str, key: str) -> Any:
+    """Return the value of a participant's message ``{KEY: value}`` (exactly that one key), or
+    None for anything else: too long, not JSON, nested too deeply, other keys."""
     if len(text) > MAX_MESSAGE:
         return None
     try:
         msg = json.loads(text)
     except (json.JSONDecodeError, RecursionError):
         return None
-    if not isinstance(msg, dict) or set(msg) != {"move"} or not isinstance(msg["move"], str):
+    if not isinstance(msg, dict) or set(msg) != {key}:
         return None
-    return msg["move"]
+    return msg[key]
+
+
+def _move(text: str) -> str | None:
+    """Return the move a participant's message names, None when it is not ``{"move": str}``."""
+    move = _field(text, "move")
+    return move if isinstance(move, str) else None
 
 
 def _timeout(text: str) -> int | None:
     """Return the step a participant's ``{"timeout": STEP}`` names, None for anything else."""
-    if len(text) > MAX_MESSAGE:
-        return None
-    try:
-        msg = json.loads(text)
-    except (json.JSONDecodeError, RecursionError):
-        return None
-    if not isinstance(msg, dict) or set(msg) != {"timeout"}:
-        return None
-    step = msg["timeout"]
+    step = _field(text, "timeout")
     return step if isinstance(step, int) and not isinstance(step, bool) else None
 
 
