@@ -11,9 +11,9 @@ import pytest
 
 import ehatp
 from ehatp.formats.policy import Policy
-from ehatp.run.walk import walk_policy
 
 from .conftest import EXAMPLES_DIR
+from .test_concurrent import solved as solved_checked
 
 STACK4 = EXAMPLES_DIR / "concurrent" / "stack4.toml"
 STACK10 = EXAMPLES_DIR / "concurrent" / "stack10.toml"
@@ -21,14 +21,7 @@ STACK10 = EXAMPLES_DIR / "concurrent" / "stack10.toml"
 
 def solved(path: Path) -> Policy:
     """The problem's policy, checked by the validator and walked through the Executor."""
-    problem = ehatp.load(path)
-    result = ehatp.solve(problem)
-    assert result.policy is not None, result.reason
-    report = ehatp.validate(problem, result.policy)
-    assert report.ok, report.message
-    walked = walk_policy(problem, result.policy)
-    assert walked.ok, str(walked)
-    return result.policy
+    return solved_checked(ehatp.load(path))
 
 
 def steps(policy: Policy) -> Iterator[tuple[tuple[str, ...], str, str]]:
