@@ -64,6 +64,13 @@ def marked(name: str, marker: Path) -> str:
     return name.replace(MARK, str(marker))
 
 
+def for_bt(name: str) -> str:
+    """``name`` with its statement separators ``;`` made newlines: still code if pasted raw,
+    and a name a behaviour tree can carry (``;`` separates the items of a list port, so a
+    name holding it is refused: test_a_name_holding_the_list_separator_...)."""
+    return name.replace(";", "\n")
+
+
 def hostile_policy(name: str) -> Policy:
     """P4's policy (informs and human choices included) with ``name`` as its problem, domain,
     in every move label, argument and literal told, and as a fact of every state."""
@@ -110,7 +117,7 @@ def string_constants(source: str) -> set[str]:
 def test_the_py_trees_module_imports_without_running_a_name_and_gives_it_back(
         tmp_path: Path, name_and_marker: tuple[str, Path]) -> None:
     pytest.importorskip("py_trees", reason="py_trees is not installed (pip install 'ehatp[bt]')")
-    name, marker = name_and_marker
+    name, marker = for_bt(name_and_marker[0]), name_and_marker[1]
     policy = hostile_policy(name)
     source = bt.to_py_trees_source(bt.from_policy(policy))
     tree = ast.parse(source)
@@ -140,7 +147,7 @@ def test_the_py_trees_module_imports_without_running_a_name_and_gives_it_back(
 
 def test_the_xml_parses_and_every_label_is_an_attribute_equal_to_it(
         name_and_marker: tuple[str, Path]) -> None:
-    name, _ = name_and_marker
+    name = for_bt(name_and_marker[0])
     policy = hostile_policy(name)
     xml = bt.to_btcpp(bt.from_policy(policy))
     root = ET.fromstring(xml, parser=ET.XMLParser(target=ET.TreeBuilder(insert_comments=True)))
@@ -305,6 +312,8 @@ def test_every_exporter_writes_a_hostile_policy_file_without_running_it(
         tmp_path: Path, command: list[str]) -> None:
     marker = tmp_path / "INJECTED-CODE-RAN"
     name = hostile_names()[0]  # valid Python both raw and as a repr in a docstring
+    if command[0] == "export":  # no ';' (refused by export bt), still code if pasted raw
+        name = 'P"""+__import__("pathlib").Path(__file__).with_suffix(chr(46)+chr(120)).touch()+"""'
     f = hostile_file(tmp_path, name)
     out = tmp_path / "out.txt"
     args = [*command, str(f)] + ([] if command == ["show"] else ["--out", str(out)])
@@ -316,6 +325,23 @@ def test_every_exporter_writes_a_hostile_policy_file_without_running_it(
         assert module.POLICY["problem"] == name
         assert not (tmp_path / "tree.x").exists()
     assert not marker.exists()
+
+
+@pytest.mark.parametrize("fmt", ["btcpp4", "py_trees"])
+def test_a_name_holding_the_list_separator_is_refused_by_export_bt_in_one_line(
+        tmp_path: Path, fmt: str) -> None:
+    """BehaviorTree.CPP splits a list port (``args``, ``literals``, ``expected``) on every
+    ``;`` with no escape: a tree holding ``pick(a;b)`` would hand the robot's program the
+    arguments ``a`` and ``b``. So ``export bt`` refuses it, naming the item and the fix."""
+    f = hostile_file(tmp_path, "a;b")
+    r = subprocess.run([sys.executable, "-m", "ehatp.cli", "export", "bt", str(f),
+                        "--format", fmt, "--out", str(tmp_path / "t")],
+                       capture_output=True, text=True, timeout=120, check=False)
+    assert r.returncode == 2, r.stderr
+    assert len(r.stderr.splitlines()) == 1, r.stderr
+    assert "holds ';', which BehaviorTree.CPP's list ports split on" in r.stderr
+    assert "rename the object or literal without ';'" in r.stderr
+    assert not (tmp_path / "t").exists()
 
 
 def test_a_policy_file_holding_a_terminal_escape_code_is_refused_in_one_line(

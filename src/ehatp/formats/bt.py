@@ -33,6 +33,7 @@ runnable py_trees behaviours live in :mod:`ehatp.formats.bt_py_trees` (``ehatp[b
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from enum import StrEnum
 from typing import TYPE_CHECKING, Any
 from xml.sax.saxutils import escape
@@ -196,7 +197,7 @@ def from_policy(policy: Policy, answers: dict[tuple[int, str], bool] | None = No
                 n = node.moves[0].to
                 continue
             key = "{" + blackboard_key(n) + "}"
-            expected = SEP.join(m.action for m in node.moves)
+            expected = port_list([m.action for m in node.moves], n)
             flat = len(node.moves) == 1
             if not flat and nested == MAX_NESTED_CHOICES:  # the branches go on in trees of
                 own.update(m.to for m in node.moves if policy.nodes[m.to].moves)  # their own
@@ -234,11 +235,28 @@ def from_policy(policy: Policy, answers: dict[tuple[int, str], bool] | None = No
     return Forest(MAIN_TREE, ordered, policy)
 
 
+def port_list(items: Sequence[str], where: int | PolicyMove) -> str:
+    """Return ``items`` as one list port value, separated by ``SEP``. Raises
+    :class:`NotExpressible` when an item holds ``SEP`` itself: BehaviorTree.CPP splits a list
+    port on every ``;`` and has no escape for it, so the robot's program would read other
+    items than the policy's (``where``: the policy node of a human choice, or the move)."""
+    for item in items:
+        if SEP in item:
+            place = (f"the human's choice at policy node {where}" if isinstance(where, int)
+                     else f"the robot's move {where.action!r}")
+            raise NotExpressible(
+                f"{item!r} in {place} holds {SEP!r}, which BehaviorTree.CPP's list ports "
+                "split on (there is no escape for it)",
+                f"rename the object or literal without {SEP!r}, or follow this policy with "
+                "ehatp execute")
+    return SEP.join(items)
+
+
 def robot_nodes(m: PolicyMove) -> list[BTNode]:
     """The nodes of one robot move; the last one ``completes`` it."""
     out: list[BTNode] = []
     if m.kind == "inform":
-        out.append(BTNode("Say", {"kind": "inform", "literals": SEP.join(m.args)}))
+        out.append(BTNode("Say", {"kind": "inform", "literals": port_list(m.args, m)}))
     elif m.kind == "ask":  # the robot asks the human's intention (§5)
         out.append(BTNode("Say", {"kind": "ask", "question": m.args[0] if m.args else
                                   m.action.removeprefix("ask(").removesuffix(")")}))
@@ -249,13 +267,13 @@ def robot_nodes(m: PolicyMove) -> list[BTNode]:
         out.append(BTNode("Silence"))
     elif m.kind in ("action", "wait"):
         if m.told:
-            out.append(BTNode("Say", {"kind": "inform", "literals": SEP.join(m.told)}))
+            out.append(BTNode("Say", {"kind": "inform", "literals": port_list(m.told, m)}))
         if m.kind == "wait":
             out.append(BTNode("RobotWait"))
         else:
             action = m.action.rsplit(" + ", 1)[-1] if m.told else m.action
             out.append(BTNode("RobotAction", {"action": action, "action_name": m.name,
-                                              "args": SEP.join(m.args)}))
+                                              "args": port_list(m.args, m)}))
     else:
         raise ValueError(f"a robot move of kind {m.kind!r} ({m.action}) has no behaviour")
     out[-1].completes = m.action
