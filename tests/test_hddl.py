@@ -167,6 +167,33 @@ def test_what_cannot_map_is_one_line(tmp_path: Path) -> None:
         hddl.read_sidecar(bad)
 
 
+def test_a_file_unified_planning_cannot_read_is_named_once_with_its_line(
+        tmp_path: Path) -> None:
+    """The error names the file that fails to parse (the domain, or the problem when the
+    domain alone reads), once, at the line and column of the parse error; a sidecar's error
+    names the sidecar, not the domain."""
+    good = DATA / "transport-domain.hddl"
+    broken = tmp_path / "broken.hddl"
+    broken.write_text("(define (domain x)\n (:requirements :hierarchy) (:types a\n", "utf-8")
+
+    def line(domain: Path, problem: Path, *extra: str) -> str:
+        r = subprocess.run([sys.executable, "-m", "ehatp.cli", "import-hddl", str(domain),
+                            str(problem), "--out", str(tmp_path / "m.py"), *extra],
+                           capture_output=True, text=True, cwd=tmp_path, check=False)
+        assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
+        return r.stderr
+
+    err = line(broken, DATA / "transport-p1.hddl")
+    assert err.startswith(f"error: {broken}:") and err.count(str(broken)) == 1
+    assert "unified-planning cannot read it" in err and "(line:" not in err
+    err = line(good, broken)
+    assert err.startswith(f"error: {broken}:") and str(good) not in err
+    side = tmp_path / "side.toml"
+    side.write_text('[resources]\nfly = ["?v"]\n', encoding="utf-8")
+    err = line(good, DATA / "transport-p1.hddl", "--sidecar", str(side))
+    assert err.startswith(f"error: {side}: [resources] names 'fly'") and str(good) not in err
+
+
 def test_left_recursion_solves() -> None:
     """The IPC's transport reaches a place through itself (get-to before a drive): a task met
     again inside its own refinement before any action is a loop, closed (docs/semantics.md §1),

@@ -35,7 +35,9 @@ def import_hddl_cmd(
         try:
             imp = import_hddl(domain, problem, agent=agent, sidecar=sidecar,
                               module_file=out.name if out else None)
-        except (HddlUnsupported, HddlMissing) as e:
+        except HddlUnsupported as e:  # its message names the file (and place) at fault
+            die(str(e))
+        except HddlMissing as e:
             die(f"{domain}: {e}")
         target = out or Path(imp.module_file)
         imp.domain(target.resolve())  # the module must build before it is written

@@ -262,15 +262,31 @@ def import_hddl(domain_file: str | Path, problem_file: str | Path, *, agent: str
     try:
         up_problem = PDDLReader().parse_problem(str(domain_file), str(problem_file))
     except Exception as e:  # noqa: BLE001 - the reader's own errors are many and untyped
-        first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
-        raise HddlUnsupported(f"{domain_file}: unified-planning cannot read it "
-                              f"({type(e).__name__}: {first})") from None
+        raise _unreadable(PDDLReader, e, domain_file, problem_file) from None
     _printable_names(up_problem, domain_file)
     name = _domain_name(domain_file)
     module = module_file or f"{_ident(name)}.py"
-    imported = _Converter(up_problem, agent, side, name, module).run()
+    imported = _Converter(up_problem, agent, side, name, module, domain_file).run()
     imported.problem_name = f"{name}/{Path(problem_file).name.removesuffix('.hddl')}"
     return imported
+
+
+def _unreadable(reader: Any, e: Exception, domain_file: str | Path,
+                problem_file: str | Path) -> HddlUnsupported:
+    """Return the one-line error for HDDL unified-planning cannot read: at the file that fails
+    (the domain read alone tells which one), with the line and column of a parse error."""
+    where: str | Path = problem_file
+    try:
+        reader().parse_problem(str(domain_file))
+    except Exception as alone:  # noqa: BLE001 - as above
+        where, e = domain_file, alone
+    first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+    at = re.search(r"\(line:(\d+), col:(\d+)\)", first)
+    if at:
+        where = f"{where}:{at.group(1)}:{at.group(2)}"
+        first = first[:at.start()].rstrip(" ,")
+    return HddlUnsupported(f"{where}: unified-planning cannot read it ({type(e).__name__}: "
+                           f"{first}); see docs/hddl.md for the HDDL ehatp reads")
 
 
 def _printable_names(p: Any, where: str | Path) -> None:
@@ -297,8 +313,10 @@ def _domain_name(path: str | Path) -> str:
 
 
 class _Converter:
-    def __init__(self, p: Any, agent: str, side: Sidecar, name: str, module_file: str) -> None:
+    def __init__(self, p: Any, agent: str, side: Sidecar, name: str, module_file: str,
+                 domain_file: str | Path) -> None:
         self.p = p
+        self.domain_file = domain_file
         self.agent = agent
         self.side = side
         self.name = name
@@ -309,8 +327,10 @@ class _Converter:
         self.notes: list[str] = []
 
     # -- helpers --
-    def unsupported(self, what: str) -> HddlUnsupported:
-        return HddlUnsupported(what)
+    def unsupported(self, what: str, place: str | Path | None = None) -> HddlUnsupported:
+        """Return the one-line error for ``what`` ehatp cannot express, at ``place`` (by
+        default the domain file)."""
+        return HddlUnsupported(f"{place or self.domain_file}: {what}")
 
     def var(self, name: str, type_: str) -> str:
         key = (name, type_)
@@ -437,7 +457,7 @@ class _Converter:
         unknown = sorted(set(side.resources) - {a.name for a in p.actions})
         if unknown:
             raise self.unsupported(f"[resources] names {unknown[0]!r}, which is not an action "
-                                   "of the domain")
+                                   "of the domain", side.source)
         cost = self.costs()
         for a in sorted(p.actions, key=lambda a: a.name):
             self.action(a, cost.get(a.name, 1))
@@ -533,8 +553,8 @@ class _Converter:
         known = {f.name for f in self.p.fluents}
         for what in (*side.classes, *side.when):
             if what not in known:
-                raise self.unsupported(f"{side.source}: [observability] names {what!r}, not a "
-                                       f"predicate of the domain ({', '.join(sorted(known))})")
+                raise self.unsupported(f"[observability] names {what!r}, not a predicate of "
+                                       f"the domain ({', '.join(sorted(known))})", side.source)
         for f in self.visibility_order():
             params = [self.var(x.name, self.tname(x.type)) for x in f.signature]
             env = {x.name: v for x, v in zip(f.signature, params, strict=True)}
@@ -559,9 +579,9 @@ class _Converter:
             if state.get(n) == 2:
                 return
             if state.get(n) == 1:
-                raise self.unsupported(f"{self.side.source}: [observability.when] "
-                                       f"{' -> '.join([*path, n])}: a visibility condition "
-                                       "cannot read its own predicate")
+                raise self.unsupported(f"[observability.when] {' -> '.join([*path, n])}: a "
+                                       "visibility condition cannot read its own predicate",
+                                       self.side.source)
             state[n] = 1
             for r in sorted(reads[n] & set(fl)):
                 visit(r, [*path, n])
@@ -578,14 +598,14 @@ class _Converter:
         for text in texts:
             pos, pred, args = literal(text, f"{self.side.source}: {where}")
             if pred != "=" and pred not in known:
-                raise self.unsupported(f"{self.side.source}: {where}: {pred!r} is not a "
-                                       "predicate of the domain")
+                raise self.unsupported(f"{where}: {pred!r} is not a predicate of the domain",
+                                       self.side.source)
             terms = []
             for a in args:
                 if a.startswith("?"):
                     if a[1:] not in env:
-                        raise self.unsupported(f"{self.side.source}: {where}: {a} is not a "
-                                               f"parameter of {where}")
+                        raise self.unsupported(f"{where}: {a} is not a parameter of {where}",
+                                               self.side.source)
                     terms.append(env[a[1:]])
                 else:
                     terms.append(_q(a))
@@ -637,7 +657,8 @@ class _Converter:
             return _q(x)
         if x[1:] not in env:
             raise self.unsupported(f"[resources] {action}: {x} is not a parameter of "
-                                   f"{action} ({', '.join('?' + n for n in env) or 'none'})")
+                                   f"{action} ({', '.join('?' + n for n in env) or 'none'})",
+                                   self.side.source)
         return env[x[1:]]
 
     def wrap(self, head: str, args: Sequence[str], tail: str = ")") -> str:
