@@ -23,7 +23,7 @@ from ehatp.model.options import Estimate
 from ehatp.run.walk import walk_policy
 
 from .conftest import EXAMPLES_DIR as EXAMPLES
-from .test_concurrent import JOINT, drawer, solved, two_hands
+from .test_concurrent import JOINT, chores, drawer, solved, two_hands
 from .test_preferences import helper, prefer
 from .test_render import browser, open_page  # noqa: F401  (browser is a fixture)
 
@@ -129,6 +129,29 @@ def test_with_the_robot_first_a_step_reads_the_robots_move_then_the_humans() -> 
         "#3 R place(c) #4 H pass (0, 1) W=1 GOAL",
     ]
     assert " step R H" in squeeze(text.splitlines())
+
+
+def test_with_the_robot_first_the_humans_moves_beside_its_action_fork_below_it() -> None:
+    """E1 (two chores) with ``first = "robot"``, by hand (C4, C5, C11). The robot decides
+    first: ``put(a)``, or ``wait``. Beside ``put(a)`` the human, who sees it start, may
+    ``put(b)`` (it commutes, no resource: goal in 1 step) or pass (beside an action it may);
+    after a pass the robot is done, so it waits and beside a wait the human may not pass:
+    ``put(b)``, 2 steps. Beside a ``wait`` first the human may not pass: ``put(b)``, then the
+    robot's ``put(a)`` beside the human's pass: 2 steps, one branch. Both are worst case 2,
+    no communication, the human acting once on every branch; the shorter average branch
+    (1.5 against 2) puts ``a`` first. The robot's line stops mid-step (no W: the step is not
+    over), the human's moves fork below it, and the pass branch's next step reaches the goal
+    node printed above."""
+    first = dataclasses.replace(JOINT, first=ehatp.StepFirst.ROBOT)
+    text = shown(solved(chores(first)))
+    assert squeeze(tree(text)) == [
+        "#0 start W=1",
+        "#1 R put(a)",
+        "H may do one of 2 beside it:",
+        "+- #2 H put(b) W=1 GOAL",
+        "`- #3 H pass W=1",
+        " #4 R wait H put(b) -> see node 2",
+    ]
 
 
 def test_a_question_is_a_step_of_its_own_whose_answer_is_implied() -> None:

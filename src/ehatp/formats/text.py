@@ -345,9 +345,9 @@ def joint_tree_lines(policy: Policy, details: bool = False,
     apart, GOAL) and, with preferences, the vector of the robot's choice (that of the node
     where the robot moves: the reply's with the human first, the step's start with the robot
     first). The tree forks where the human chooses, as :func:`tree_lines` does (with the
-    robot first, the human's moves beside the robot's fork below it, a line each); a question
-    is a step of its own, the robot's answer implied. A node printed above is ``→ see node
-    N``."""
+    robot first, the human's moves beside the robot's fork below it, a line each, and the
+    robot's line, which ends in mid-step, has no W); a question is a step of its own, the
+    robot's answer implied. A node printed above is ``→ see node N``."""
     robot = policy.agents["robot"]
     name_w = max(len(a) for a in policy.agents.values())
     w1 = max([len("start"), *(len(m.action) for _, m in policy.edges() if m.step != "reply")])
@@ -374,9 +374,11 @@ def joint_tree_lines(policy: Policy, details: bool = False,
             return True
         printed.add(i)
         n = policy.nodes[i]
-        flags: list[Segment] = [(f"  W={n.worlds}", "cyan" if n.worlds > 1 else "dim")]
-        if not n.copresent:
-            flags.append(("  apart", "blue"))
+        flags: list[Segment] = []
+        if i == 0 or not any(m.step == "reply" for m in n.moves):  # not in mid-step
+            flags.append((f"  W={n.worlds}", "cyan" if n.worlds > 1 else "dim"))
+            if not n.copresent:
+                flags.append(("  apart", "blue"))
         if n.goal:
             c.append(("  GOAL", "bold green"))
         out.append(Line(guides, [*segs, *flags, *c]))
