@@ -226,3 +226,34 @@ def test_the_explorer_header_gives_the_steps_the_profile_and_the_root_vector(
         "· profile lazy_human (human_effort, makespan), worst-case estimate; root: "
         "human_effort = 1, makespan = 1")
     assert browser.find_element(By.ID, "policy-worst-case").text == "worst-case cost 3"
+
+
+def test_every_random_joint_policy_shows_each_branch_as_its_steps() -> None:
+    """The agreement benchmark's random problems in joint steps (seeds 0-599; informs,
+    questions, separations, the robot first, preferences): ``ehatp show`` prints each, and on
+    every branch (the first 100 of each policy) the timeline has one line per step, i.e. per
+    move that starts a step or is a question, and no more; each tree line holds at most one
+    move of each agent."""
+    from ehatp.experiments.randomgen import problem
+
+    checked = 0
+    for seed in range(600):
+        p = problem(seed)
+        if not p.steps.concurrent:
+            continue
+        policy = ehatp.solve(p, max_states=20000, timeout=4).policy
+        if policy is None:
+            continue
+        text = shown(policy)
+        steps = [int(n) for n in re.findall(r"^branch \d+ -> leaf #\d+ \((?:no )?goal\), "
+                                            r"(\d+) steps?, cost", text, re.M)]
+        want = [sum(1 for ps in branch[1:] if ps.move is not None and ps.move.step != "reply")
+                + (1 if branch[1:] and branch[1].move is not None
+                   and branch[1].move.step == "reply" else 0)
+                for _, branch in zip(range(100), policy.iter_branches(), strict=False)]
+        assert steps == want, seed
+        for line in tree(text):
+            for agent in ("H", "R"):
+                assert len(re.findall(rf"(?:^|\s){agent}  \S", line)) <= 1, (seed, line)
+        checked += 1
+    assert checked >= 20, checked
