@@ -10,10 +10,14 @@ branch, up to a cap, through the Executor: ``ehatp.run.walk``; the check is
 ``ehatp.experiments.agreement``), looks in its file for a human
 node with two moves of one label (a branch on a choice the robot cannot see, docs/semantics.md
 §3), and on one seed in ten solves again (and declared in reverse order), expecting
-byte-identical policy JSON. A search stopped by its limits is counted apart (skipped). Prints
-every crash, disagreement, non-executable policy and hidden-choice branch with its seed (and, in
-braces, the model options its problem sets away from the defaults), then the counts and the
-time taken; exits 1 if there is any of them. ``--no-symmetry`` solves without the symmetry
+byte-identical policy JSON. A problem with preference profiles (``[objective] kind =
+"preferences"``, docs/concurrent.md C11: half of those in joint steps) is solved keeping its
+graph, relabelled for each of its profiles, and each policy compared with a fresh solve for
+that profile (byte for byte), validated and executed. A search stopped by its limits is
+counted apart (skipped). Prints every crash, disagreement, non-executable policy, hidden-choice
+branch and relabelling that differs with its seed (and, in braces, the model options its
+problem sets away from the defaults), then the counts and the time taken; exits 1 if there is
+any of them. ``--no-symmetry`` solves without the symmetry
 reduction (docs/semantics.md §3), whatever the problems say.
 """
 
@@ -89,6 +93,10 @@ def show(seed: int, walk_cap: int, symmetry: bool | None) -> int:
               + (f"; fails: {o.unexecutable}" if o.unexecutable else ", every one to the goal"))
     if o.hidden_choice:
         print(f"branches on a hidden choice: {o.hidden_choice}")
+    if o.preferences:
+        print(f"preference profiles: {o.relabelled} relabelled"
+              + (f"; {o.relabel_differs}" if o.relabel_differs else
+                 ", each the policy of a fresh solve, valid and executed"))
     return 1 if o.failed else 0
 
 
@@ -109,6 +117,8 @@ def report(outcomes: list[agreement.Outcome], seeds: range, elapsed: float, jobs
                 print(f"  non-executable: {o.unexecutable}")
             if o.hidden_choice:
                 print(f"  branches on a hidden choice: {o.hidden_choice}")
+            if o.relabel_differs:
+                print(f"  relabelling: {o.relabel_differs}")
     c = agreement.summary(outcomes)
     checked = sum(o.checked_determinism for o in outcomes)
     failures = sum(o.failed for o in outcomes)
@@ -124,9 +134,13 @@ def report(outcomes: list[agreement.Outcome], seeds: range, elapsed: float, jobs
           f"{walk_cap} branches; {walk_time:.1f} s of the workers' time), "
           f"non-executable {c['non-executable']}, "
           f"branches on a hidden choice {c['hidden-choice']}")
+    solved_prefs = sum(1 for o in outcomes if o.preferences and o.kind == "solved")
+    print(f"preference profiles: {c['preferences']} problems ({solved_prefs} solved), "
+          f"{c['relabelled']} profiles relabelled and compared with a fresh solve, "
+          f"relabellings that differ {c['relabel-differs']}")
     print("OK: planner and validator agree, every policy executes" if not failures else
           f"FAIL: {failures} seed(s) with a crash, disagreement, nondeterminism, "
-          f"non-executable policy or branch on a hidden choice "
+          f"non-executable policy, branch on a hidden choice or relabelling that differs "
           f"({plain} with every model option at its default)")
     return 1 if failures else 0
 

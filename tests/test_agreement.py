@@ -42,6 +42,8 @@ def test_planner_and_validator_agree_and_every_policy_executes_on_random_problem
     assert counts["solved"] >= len(seeds) // 3, counts
     assert counts["executed"] == counts["solved"], counts
     assert sum(o.branches for o in outcomes) >= counts["solved"]
+    # preference profiles (C11): some problems solved, each profile relabelled exactly
+    assert counts["relabelled"] >= 10 and counts["relabel-differs"] == 0, counts
     assert sum(o.checked_determinism for o in outcomes) >= len(seeds) // 20
 
 
@@ -121,7 +123,8 @@ def test_the_generator_draws_every_feature() -> None:
                "option:human.passes=idle", "option:human.passes=prototype",
                "option:human.intentions=visible", "option:communication.robot_asks=True",
                "option:communication.announce=True", "option:communication.speech=with-action",
-               "option:communication.relevance=plan", "option:communication.inform=anywhere"])
+               "option:communication.relevance=plan", "option:communication.inform=anywhere",
+               "option:objective.kind=preferences", "option:objective.estimate=optimistic"])
     missing = [w for w in want if seen[w] == 0]
     assert not missing, (missing, seen)
 
@@ -205,7 +208,60 @@ def test_every_setting_varies_and_some_problems_keep_every_default() -> None:
     plain = 0
     for s in _specs():
         for k, v in s.settings:
-            values[k].add(repr(v))
+            values.setdefault(k, set()).add(repr(v))
         plain += not s.options()
     assert all(len(v) >= 2 for v in values.values()), values
     assert len(SEEDS) // 4 <= plain <= 3 * len(SEEDS) // 4
+
+
+def test_preference_profiles_change_only_the_objective_of_the_joint_problems_they_draw(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Preferences (C11) are drawn last from a generator of their own: with none drawn, every
+    seed is the problem it was; where they are drawn (a problem in joint steps), only the
+    ``objective`` settings differ: the kind, 2-3 profiles of 1-5 distinct built-in metrics,
+    one of them chosen, an estimate."""
+    monkeypatch.setattr(randomgen, "PREFERENCES", 0.0)
+    before = [randomgen.draw(seed) for seed in SEEDS]
+    monkeypatch.undo()
+    estimates = set()
+    drawn = 0
+    for old, new in zip(before, _specs(), strict=True):
+        if dict(new.settings).get("objective.kind") != "preferences":
+            assert new == old
+            continue
+        drawn += 1
+        assert new.setting("steps.mode") == "concurrent"
+        rest = tuple((k, v) for k, v in new.settings if not k.startswith("objective."))
+        assert rest == tuple((k, v) for k, v in old.settings if not k.startswith("objective."))
+        assert replace(new, settings=old.settings) == old
+        profiles = new.setting("objective.profiles")
+        assert isinstance(profiles, dict) and 2 <= len(profiles) <= 3
+        for metrics in profiles.values():
+            assert 1 <= len(metrics) == len(set(metrics)) <= 5
+            assert set(metrics) <= set(randomgen.METRICS)
+        assert new.setting("objective.profile") in profiles
+        estimates.add(new.setting("objective.estimate"))
+    joint = sum(s.setting("steps.mode") == "concurrent" for s in before
+                if "steps.mode" in dict(s.settings))
+    assert joint // 4 <= drawn <= 3 * joint // 4, (drawn, joint)
+    assert estimates == {"worst-case", "optimistic"}
+
+
+def test_a_relabelled_policy_that_is_not_the_fresh_solves_is_a_failure(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The check compares each profile's relabelled policy with a fresh solve: a relabeller
+    that always gives the chosen profile's policy is caught (the file records the profile, so
+    another profile's policy never has its bytes), and the seed fails."""
+    from ehatp.search.planner import Relabeler
+
+    seed = next(s.seed for s in _specs()
+                if dict(s.settings).get("objective.kind") == "preferences"
+                and agreement.check(s.seed, determinism=False).relabelled >= 2)
+    good = agreement.check(seed, determinism=False)
+    assert good.preferences and not good.failed and good.relabel_differs == ""
+    real = Relabeler.relabel
+    monkeypatch.setattr(Relabeler, "relabel",
+                        lambda self, profile: real(self, self.problem.objective.profile))
+    bad = agreement.check(seed, determinism=False)
+    assert bad.failed and "differs from a fresh solve" in bad.relabel_differs
+    assert agreement.summary([good, bad])["relabel-differs"] == 1

@@ -23,17 +23,19 @@ from ehatp.play.session import MemoryLog, PlaySession, Source, policy_hash, repl
 from .conftest import EXAMPLES_DIR, ROOT
 
 STACK4 = EXAMPLES_DIR / "concurrent" / "stack4.toml"
+STACK10 = EXAMPLES_DIR / "concurrent" / "stack10.toml"
 HAVE_WEB = all(importlib.util.find_spec(m) for m in ("starlette", "uvicorn", "httpx"))
 pytestmark = pytest.mark.filterwarnings("ignore:Using `httpx` with `starlette.testclient`")
 needs_web = pytest.mark.skipif(not HAVE_WEB, reason="ehatp[play] is not installed "
                                "(pip install 'ehatp[play]' httpx)")
 
 
-def stack4(diligent_policy: bool = False) -> tuple[Problem, Policy]:
-    """Stack4 and its policy; ``diligent_policy``: the policy planned for a human who passes
-    only with nothing it could do (``[human] passes = "idle"``), so a participant's ``pass``
-    where it could act is a move the policy does not cover."""
-    problem = ehatp.load(STACK4)
+def stack4(diligent_policy: bool = False, path: Path = STACK4) -> tuple[Problem, Policy]:
+    """Stack4 (or the stacking problem at ``path``) and its policy; ``diligent_policy``: the
+    policy planned for a human who passes only with nothing it could do (``[human] passes =
+    "idle"``), so a participant's ``pass`` where it could act is a move the policy does not
+    cover."""
+    problem = ehatp.load(path)
     planned = problem
     if diligent_policy:
         planned = dataclasses.replace(problem, human=dataclasses.replace(
@@ -44,8 +46,8 @@ def stack4(diligent_policy: bool = False) -> tuple[Problem, Policy]:
 
 
 def session(problem: Problem, policy: Policy, log: MemoryLog,
-            timeout: float | None = 5.0) -> PlaySession:
-    src = Source(str(STACK4), "sha256:test", None, policy_hash(policy), "test")
+            timeout: float | None = 5.0, path: Path = STACK4) -> PlaySession:
+    src = Source(str(path), "sha256:test", None, policy_hash(policy), "test")
     s = PlaySession(problem, policy, src, session_id="test", log=log, clock=lambda: "T",
                     decision_timeout=timeout)
     s.start()
@@ -149,14 +151,19 @@ def test_a_scripted_participant_plays_stack4_to_the_goal_over_the_socket(
     times out (a pass the policy does not cover: a replan), then it takes the first move that
     is not a pass at each decision, reading the robot's signal, until the tower stands. The
     session's log records the replan and the goal."""
+    play_over_the_socket(STACK4, tmp_path)
+
+
+def play_over_the_socket(path: Path, tmp_path: Path) -> None:
+    """The scripted participant of the test above on the stacking problem at ``path``."""
     from starlette.testclient import TestClient
 
     from ehatp.play.files import session_log
     from ehatp.play.server import Hub, make_app
     from ehatp.play.session import read_log
 
-    problem, policy = stack4(diligent_policy=True)
-    src = Source(str(STACK4), "sha256:test", None, policy_hash(policy), "test")
+    problem, policy = stack4(diligent_policy=True, path=path)
+    src = Source(str(path), "sha256:test", None, policy_hash(policy), "test")
 
     def factory(sid: str) -> PlaySession:
         return PlaySession(problem, policy, src, session_id=sid,
@@ -173,7 +180,8 @@ def test_a_scripted_participant_plays_stack4_to_the_goal_over_the_socket(
             signals = []
             while view["status"] == "your-turn":
                 signals.append(view["signal"]["key"])
-                move = next(m["label"] for m in view["moves"] if m["label"] != "pass")
+                move = next((m["label"] for m in view["moves"] if m["label"] != "pass"),
+                            "pass")  # blocked (holding a cube whose turn has not come)
                 ws.send_text(json.dumps({"move": move}))
                 view = _until_decision(ws, view["step"])
             assert view["status"] == "goal"
@@ -183,3 +191,58 @@ def test_a_scripted_participant_plays_stack4_to_the_goal_over_the_socket(
     assert [r["type"] for r in records].count("replan") == 1
     [end] = [r for r in records if r["type"] == "end"]
     assert end["outcome"] == "goal"
+
+
+def test_a_scripted_participant_builds_the_ten_cube_tower_after_a_replan() -> None:
+    """Issue 20's "How we will know": ``examples/concurrent/stack10.toml`` played by a
+    scripted participant to the goal, with a replan after an uncovered move (the session
+    layer: what ``ehatp play`` runs behind its socket). By hand (docs/domains/stacking.md):
+    at the root ``c1`` (shared) is the next cube, so the human may pick it or pass (C5: the
+    robot can pick it); the policy planned for a diligent human (``passes = "idle"``) covers
+    only ``pick(c1)``, its reply ``wait`` ("I will be passive this step"). The participant
+    passes: the robot plans again for the problem's human (one replan; makespan 2n = 20, the
+    human who passes whenever it may) and replies ``pick(c1)``, its only action ((pass, wait)
+    is no step). Then the participant passes at every third decision where it may, and
+    otherwise takes the first other move (a pass when it is the only one: the human holds a
+    cube whose turn has not come). The tower stands within 20 steps (no branch is
+    longer), no step pairs the human's ``pick(x)`` with the robot's ``pick(x)`` (C3), and the
+    log replays."""
+    problem, policy = stack4(diligent_policy=True, path=STACK10)
+    log = MemoryLog()
+    s = session(problem, policy, log, path=STACK10)
+    [offer] = [r for r in log.records if r["type"] == "offer"]
+    assert (offer["moves"], offer["covered"], offer["signal"]) == (
+        ["pick(c1)", "pass"], ["pick(c1)"], "passive")
+    assert s.choose("pass") == "replanned"
+    s.run_robot()
+    [replan] = [r for r in log.records if r["type"] == "replan"]
+    assert replan["cost"] == 20
+    assert [e.text for e in s.feed][-1] == "R: pick(c1)"
+    decisions = 0
+    while not s.over:
+        moves = [m["label"] for m in s.moves()]
+        passing = decisions % 3 == 1 and "pass" in moves
+        other = next((m for m in moves if m != "pass"), "pass")  # "pass" alone: blocked
+        assert s.choose("pass" if passing else other) == "played"
+        s.run_robot()
+        decisions += 1
+    assert s.outcome == "goal" and s.replans == 1
+    steps = [r for r in log.records if r["type"] == "step"]
+    assert len(steps) % 2 == 0 and len(steps) // 2 <= 20
+    pairs = [(h["move"], r["move"]) for h, r in zip(steps[::2], steps[1::2], strict=True)]
+    assert all(h != r or not h.startswith("pick(") for h, r in pairs), pairs
+    assert {f"c{i}" for i in range(1, 11)} <= {
+        m.partition("(")[2].partition(",")[0] for pair in pairs for m in pair
+        if m.startswith("place(")}
+    again = replay(log.records, problem, policy, s.source)
+    assert again.ok, str(again)
+
+
+@needs_web
+def test_a_scripted_participant_plays_stack10_to_the_goal_over_the_socket(
+        tmp_path: Path) -> None:
+    """As for stack4 above, over the socket: ``stack10.toml``, the diligent human's policy,
+    the first decision timing out (an uncovered pass: a replan), then the first move that is
+    not a pass at each decision (a pass when it is the only one) until the ten cubes
+    stand."""
+    play_over_the_socket(STACK10, tmp_path)

@@ -39,6 +39,10 @@ def show_cmd(
     other moves into it end with "-> see node N".
     Timelines: turns while the agents are together,
     parallel lanes while they are apart. Colour on a terminal, plain text in a pipe.
+    In joint steps ([steps] mode = "concurrent") a line of the tree and of a timeline is a
+    step: the human's move, then the robot's reply (the robot's first with first = "robot");
+    with preference profiles the header gives the profile and the root's vector, and the
+    tree the vector beside each robot choice (docs/rendering.md).
     The file is checked first (exit 2, one line, if it was edited into something else): its
     structure, that what it says agrees with its own graph (values, who moves, goals, worlds,
     the moves' text), and with --problem that it was planned for that problem. Whether every

@@ -2,8 +2,12 @@
 (:mod:`ehatp.experiments.randomgen`). For one seed, :func:`check` solves the problem, validates
 the policy from its file text, looks in that file for a hidden choice, walks the policy on its
 branches through the Executor and (on a sample) solves again, and again with the problem
-declared in reverse order, expecting the same bytes. ``benchmarks/agreement.py`` and
-``tests/test_agreement.py`` run it on many seeds through :func:`run`.
+declared in reverse order, expecting the same bytes. A problem with preference profiles
+(``[objective] kind = "preferences"``, C11) is solved keeping its graph, which is relabelled
+for each of its other profiles: each policy must be the one a fresh solve with that profile
+chosen writes, byte for byte, valid, and executable (:func:`relabelled`).
+``benchmarks/agreement.py`` and ``tests/test_agreement.py`` run it on many seeds through
+:func:`run`.
 """
 
 from __future__ import annotations
@@ -14,12 +18,17 @@ import multiprocessing
 import time
 import traceback
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
 
 from ..formats.policy import Policy, label_key
+from ..model.options import ObjectiveKind
+from ..model.problem import Problem
 from ..search.limits import SolveStatus
 from .randomgen import build, draw
+
+if TYPE_CHECKING:
+    from ..search.planner import Result
 
 MAX_STATES = 20_000
 TIMEOUT = 4.0
@@ -57,10 +66,17 @@ class Outcome:
     unexecutable: str = ""
     hidden_choice: str = ""
     walk_seconds: float = 0.0
+    # preference profiles (C11): the problem has them; the other profiles relabelled (and
+    # compared with a fresh solve); the first that differs, or whose policy the validator
+    # rejects or the Executor cannot walk (:func:`relabelled`)
+    preferences: bool = False
+    relabelled: int = 0
+    relabel_differs: str = ""
 
     @property
     def failed(self) -> bool:
-        return self.kind in FAILURES or bool(self.unexecutable or self.hidden_choice)
+        return self.kind in FAILURES or bool(self.unexecutable or self.hidden_choice
+                                             or self.relabel_differs)
 
 
 FAILURES = ("crash", "disagreement", "nondeterministic")
@@ -68,6 +84,10 @@ KINDS = ("solved", "unsolvable", "limit", *FAILURES)
 EXECUTION = ("executed", "capped", "non-executable", "hidden-choice")
 """The execution counts of :func:`summary`: policies walked, walks stopped at the cap, walks
 that failed, policies that branch on a hidden choice."""
+RELABELLING = ("preferences", "relabelled", "relabel-differs")
+"""The counts of :func:`summary` for preference profiles (C11): problems with profiles,
+profiles relabelled on a kept graph, seeds where one differs from a fresh solve (or is
+invalid, or does not execute)."""
 
 
 def _where(e: BaseException) -> str:
@@ -98,6 +118,40 @@ def hidden_choices(policy: Policy) -> list[str]:
     return out
 
 
+def relabelled(prob: Problem, result: Result, *, max_states: int, timeout: float,
+               walk_cap: int, symmetry: bool | None) -> tuple[int, str]:
+    """C11 on a solved preferences problem: ``result`` (solved with ``keep_graph=True``)
+    relabelled for each profile of ``prob``, in name order. Each policy must have the bytes
+    of a fresh solve with that profile chosen (``result``'s own for the chosen profile), be
+    valid for that problem (read from its file text) and walk through the Executor on its
+    branches. Return the profiles compared (a fresh solve stopped by a limit is not
+    comparable, and not counted) and the first failure ("" when none)."""
+    from ..check.validator import validate
+    from ..run.walk import walk_policy
+    from ..search.planner import solve
+
+    assert result.graph is not None
+    compared = 0
+    for name in sorted(prob.objective.profiles):
+        mine = replace(prob, objective=prob.objective.with_profile(name))
+        text = result.graph.relabel(name).to_json()
+        fresh = (result if name == prob.objective.profile else
+                 solve(mine, max_states=max_states, timeout=timeout, symmetry=symmetry))
+        if fresh.status in (SolveStatus.TIMEOUT, SolveStatus.STATE_LIMIT):
+            continue
+        compared += 1
+        if fresh.policy is None or fresh.policy.to_json() != text:
+            return compared, (f"profile {name}: the relabelled policy differs from a fresh "
+                              f"solve's ({fresh.status})")
+        report = validate(mine, Policy.from_dict(json.loads(text)))
+        if not report.ok:
+            return compared, f"profile {name}: {report.message.splitlines()[0]}"
+        walk = walk_policy(mine, Policy.from_dict(json.loads(text)), cap=walk_cap)
+        if not walk.ok:
+            return compared, f"profile {name}: not executable: {walk.message.splitlines()[0]}"
+    return compared, ""
+
+
 def check(seed: int, *, determinism: bool | None = None, max_states: int = MAX_STATES,
           timeout: float = TIMEOUT, walk_cap: int = WALK_CAP,
           symmetry: bool | None = None) -> Outcome:
@@ -114,13 +168,14 @@ def check(seed: int, *, determinism: bool | None = None, max_states: int = MAX_S
         determinism = seed % DETERMINISM_EVERY == 0
     start = time.perf_counter()
     stage = "draw"
+    prefs = False
     status = ""
     options: tuple[str, ...] = ()
     execution: dict[str, Any] = {}
 
     def out(kind: str, detail: str = "", checked: bool = False) -> Outcome:
         return Outcome(seed, kind, status, detail, checked, time.perf_counter() - start,
-                       options, **execution)
+                       options, preferences=prefs, **execution)
 
     try:
         spec = draw(seed)
@@ -128,7 +183,9 @@ def check(seed: int, *, determinism: bool | None = None, max_states: int = MAX_S
         stage = "build"
         prob = build(spec)
         stage = "solve"
-        r = solve(prob, max_states=max_states, timeout=timeout, symmetry=symmetry)
+        prefs = prob.objective.kind == ObjectiveKind.PREFERENCES
+        r = solve(prob, max_states=max_states, timeout=timeout, symmetry=symmetry,
+                  keep_graph=prefs)
         status = r.status
         if r.policy is not None:
             # from the policy's file text (format v2), as a user's validate would read it
@@ -147,6 +204,11 @@ def check(seed: int, *, determinism: bool | None = None, max_states: int = MAX_S
                          "walk_seconds": time.perf_counter() - t0}
             if not report.ok:
                 return out("disagreement", report.message.splitlines()[0])
+            if prefs and r.graph is not None:
+                stage = "relabel"
+                n, differs = relabelled(prob, r, max_states=max_states, timeout=timeout,
+                                        walk_cap=walk_cap, symmetry=symmetry)
+                execution.update(relabelled=n, relabel_differs=differs)
         if r.status in (SolveStatus.TIMEOUT, SolveStatus.STATE_LIMIT):
             return out("limit", r.reason)
         if r.status not in (SolveStatus.SOLVED, SolveStatus.UNSOLVABLE):
@@ -198,9 +260,12 @@ def run(seeds: Iterable[int], *, jobs: int = 1,
 
 def summary(outcomes: Sequence[Outcome]) -> dict[str, int]:
     """Counts by kind (every kind present, in :data:`KINDS` order), then the execution counts
-    of :data:`EXECUTION`."""
-    counts = dict.fromkeys((*KINDS, *EXECUTION), 0)
+    of :data:`EXECUTION`, then those of :data:`RELABELLING`."""
+    counts = dict.fromkeys((*KINDS, *EXECUTION, *RELABELLING), 0)
     for o in outcomes:
+        counts["preferences"] += o.preferences
+        counts["relabelled"] += o.relabelled
+        counts["relabel-differs"] += bool(o.relabel_differs)
         counts[o.kind] += 1
         counts["executed"] += o.executed
         counts["capped"] += o.capped
@@ -209,5 +274,6 @@ def summary(outcomes: Sequence[Outcome]) -> dict[str, int]:
     return counts
 
 
-__all__ = ["DETERMINISM_EVERY", "EXECUTION", "FAILURES", "KINDS", "MAX_STATES", "TIMEOUT",
-           "WALK_CAP", "Outcome", "check", "hidden_choices", "run", "summary"]
+__all__ = ["DETERMINISM_EVERY", "EXECUTION", "FAILURES", "KINDS", "MAX_STATES", "RELABELLING",
+           "TIMEOUT", "WALK_CAP", "Outcome", "check", "hidden_choices", "relabelled", "run",
+           "summary"]

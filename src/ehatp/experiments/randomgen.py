@@ -79,14 +79,18 @@ What a spec draws (probabilities are per problem unless said otherwise):
   options are drawn, witness "start" one time in four, the robot deciding first one time in
   four; those problems leave speech, the
   robot's question and its announcement at their defaults.
+- **Preference profiles** (:data:`PREFERENCES`): half of the problems in joint steps take
+  ``[objective] kind = "preferences"`` (docs/concurrent.md, C11): 2-3 profiles, each 1-5 of
+  the built-in metrics (:data:`METRICS`) in a random order, one of them chosen, the
+  worst-case estimate (0.7) or the optimistic one.
 
 Settings are drawn in one place, :data:`SETTINGS`, a dict from ``"table.field"`` to a sampler;
 each is drawn from its own generator (seeded by the seed and the key), so adding a setting
 changes no other draw. :data:`TABLES` says how a table becomes part of the :class:`Problem`.
 The draws of :data:`LOOPS`, :data:`ORDERS`, :data:`VALUES`, :data:`SHARED`, :data:`BLOCKED`,
-:data:`COMMIT` and :data:`TWINS` also have generators of their own: each changes only the
-problems it draws on (the last four, and the options added with them, changed about 60% of
-the seeds' problems of version 0.2; the rest are the same problems).
+:data:`COMMIT`, :data:`TWINS` and :data:`PREFERENCES` also have generators of their own: each
+changes only the problems it draws on (the last five, and the options added with them,
+changed about 60% of the seeds' problems of version 0.2; the rest are the same problems).
 
 The module is over 800 lines on purpose: the draws are one recipe, each step a function, read
 top to bottom for one seed (docs/architecture.md).
@@ -114,9 +118,11 @@ from ..model.formula import TRUE, Atom, Formula, Var, conj, eq
 from ..model.options import (
     DEFAULT_TIES,
     Communication,
+    Estimate,
     HumanModel,
     InformWhere,
     Intentions,
+    Metric,
     Objective,
     ObjectiveKind,
     Passes,
@@ -1126,10 +1132,42 @@ def draw_twins(spec: Spec) -> Spec:
                    robot_agenda=agenda, human=human)
 
 
+PREFERENCES = 0.5
+METRICS = ("makespan", "human_end", "human_effort", "effort", "communications")
+"""Preference profiles (C11, docs/concurrent.md "Preferences"): the share of the problems in
+joint steps that take ``[objective] kind = "preferences"``, and the metrics their profiles are
+drawn from (the built-in ones, named here so that a metric added later changes no draw). The
+problem gets 2-3 profiles ``p0``, ``p1``, ... (settings ``objective.profiles``), each 1-5 of
+the metrics in a random order; the one chosen (``objective.profile``), and the estimate
+(``objective.estimate``: worst-case 0.7, else optimistic). Drawn last, from a generator of
+its own (see :func:`draw_preferences`): a problem in turns, or in joint steps without
+preferences, is the one it was before."""
+
+
+def draw_preferences(spec: Spec) -> Spec:
+    """``spec`` with the preference profiles of :data:`PREFERENCES` when it is in joint steps
+    and drawn to have them (its ``objective`` settings then say so)."""
+    settings = dict(spec.settings)
+    if settings.get("steps.mode") != StepMode.CONCURRENT:
+        return spec
+    r = random.Random(f"{spec.seed}:preferences")
+    if r.random() >= PREFERENCES:
+        return spec
+    profiles = {f"p{i}": tuple(Metric(m) for m in r.sample(METRICS, r.randint(1, len(METRICS))))
+                for i in range(r.randint(2, 3))}
+    settings.update({
+        "objective.kind": ObjectiveKind.PREFERENCES,
+        "objective.profiles": profiles,
+        "objective.profile": r.choice(sorted(profiles)),
+        "objective.estimate": Estimate.WORST_CASE if r.random() < 0.7 else Estimate.OPTIMISTIC,
+    })
+    return replace(spec, settings=tuple(sorted(settings.items())))
+
+
 def draw(seed: int) -> Spec:
     """The spec of seed ``seed`` (deterministic)."""
     spec = draw_shared(draw_orders(draw_loops(_Drawer(seed).spec())))
-    return draw_twins(draw_commit(draw_values(draw_blocked(spec))))
+    return draw_preferences(draw_twins(draw_commit(draw_values(draw_blocked(spec)))))
 
 
 # --- building ---------------------------------------------------------------------------------
@@ -1316,5 +1354,6 @@ def problem(seed: int, *, reverse: bool = False) -> Problem:
     return build(draw(seed), reverse=reverse)
 
 
-__all__ = ["BLOCKED", "COMMIT", "SETTINGS", "SHARED", "TABLES", "TWINS", "VALUES", "ModelSpec",
-           "Spec", "ValueSpec", "build", "draw", "problem"]
+__all__ = ["BLOCKED", "COMMIT", "METRICS", "PREFERENCES", "SETTINGS", "SHARED", "TABLES", "TWINS",
+           "VALUES", "ModelSpec", "Spec", "ValueSpec", "build", "draw", "draw_preferences",
+           "problem"]

@@ -644,8 +644,10 @@
 
   const moveCount = nodes.reduce((a, n) => a + n.moves.length, 0);
   $("policy-title").textContent = `${policy.problem} — ${policy.domain}`;
-  const objective = policy.objective && policy.objective.kind === "expected" ? "expected" : "worst-case";
-  const mark = (kind) => (kind === objective ? " (optimised)" : "");
+  // a preference profile (C11) is what a "preferences" policy optimised: neither cost is marked
+  const kind = policy.objective && policy.objective.kind;
+  const objective = kind === "expected" || kind === "preferences" ? kind : "worst-case";
+  const mark = (k) => (k === objective ? " (optimised)" : "");
   const costs = $("policy-costs");
   if (policy.worst_case !== null && policy.worst_case !== undefined &&
       policy.expected !== null && policy.expected !== undefined) {
@@ -653,6 +655,20 @@
       " · ", h("span", { id: "policy-expected" }, `expected cost ${policy.expected}${mark("expected")}`));
   } else {
     costs.append(h("span", { id: "policy-cost" }, `${objective} cost ${policy.cost} (optimised)`));
+  }
+  // joint steps (docs/concurrent.md): who moves first; a preference profile and the root's vector
+  const steps = policy.steps;
+  if (steps && steps.mode === "concurrent") {
+    $("policy-joint").hidden = false;
+    const first = steps.first === "robot" ? ROBOT : HUMAN;
+    const other = first === ROBOT ? HUMAN : ROBOT;
+    $("policy-steps").textContent = `joint steps: ${first} moves first, ${other} replies`;
+    const o = policy.objective || {};
+    if (o.kind === "preferences" && Array.isArray(o.metrics) && Array.isArray(o.value)) {
+      const root = o.metrics.map((m, i) => `${m} = ${o.value[i]}`).join(", ");
+      $("policy-profile").textContent = ` · profile ${o.profile} (${o.metrics.join(", ")}), ` +
+        `${o.estimate || "worst-case"} estimate; root: ${root}`;
+    }
   }
   $("policy-facts").textContent = [
     `${policy.leaves} branch${policy.leaves === 1 ? "" : "es"}`,
