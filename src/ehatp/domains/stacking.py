@@ -82,6 +82,15 @@ def make_domain() -> Domain:
                  subtasks=[place(c, p), stack()])
         m.method(stack, "pick", params=[c, p], pre=handempty(who) & ontable(c) & reach
                  & target(c, p) & wanted(p), subtasks=[pick(c), stack()])
+
+    # metrics a preference profile may order (C11): what a human who likes to build minds
+    robot_pick = d.robot.operators["pick"]
+    d.metric("shared_taken", agent="robot", actions=[robot_pick], when=zone(c, SHARED),
+             doc="the cubes the robot takes from the shared zone")
+    d.metric("shared_preempted", agent="robot", actions=[robot_pick],
+             when=zone(c, SHARED) & handempty(H),
+             doc="the cubes the robot takes from the shared zone while the human's hand is "
+                 "free (cubes the human could have taken)")
     return d
 
 

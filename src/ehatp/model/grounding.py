@@ -15,6 +15,7 @@ from .domain import (
     AgentModel,
     Assign,
     Domain,
+    DomainMetric,
     Effect,
     ForEach,
     Method,
@@ -248,8 +249,8 @@ class _Grounder:
         attributes there). The robot's model reaches the belief worlds' agendas too when the
         human's view of it is the robot's own."""
         d = self.d
-        robot = self.ground_model(d.robot, [r_ag])
-        human = self.ground_model(d.human, [h_ag])
+        robot = self.ground_model(d.robot, [r_ag], who="robot")
+        human = self.ground_model(d.human, [h_ag], who="human")
         beliefs = []
         belief_agendas = [r_ag]
         for w in self.p.beliefs:
@@ -263,7 +264,7 @@ class _Grounder:
         rh = (robot if d.robot_seen_by_human is d.robot
               else self.ground_model(d.robot_seen_by_human, belief_agendas, estimate=True))
         if rh is robot and any(ag != r_ag for ag in belief_agendas):
-            robot = rh = self.ground_model(d.robot, belief_agendas)
+            robot = rh = self.ground_model(d.robot, belief_agendas, who="robot")
         return robot, human, rh, beliefs
 
     def _goal(self) -> Formula:
@@ -411,14 +412,15 @@ class _Grounder:
         return tuple(self.task_id(call_str(n, a)) for n, a in calls)
 
     def ground_model(self, model: AgentModel, agendas: Sequence[tuple[int, ...]],
-                     estimate: bool = False) -> GModel:
+                     estimate: bool = False, who: str = "") -> GModel:
         """Ground the tasks reachable from ``agendas``: ``[limits] ground_ahead`` of them ahead,
         the rest when first asked for (§1; an estimate is always ground whole, so that
         "a task it does not know" means one it cannot reach, §4). In the human's
         ``estimate`` of the robot model a task it does not know has no way to be done (the
-        human cannot expect it)."""
+        human cannot expect it). ``who`` (``"robot"``, ``"human"``; ``""`` for the estimate)
+        says which agent's actions the domain's metrics count (C11)."""
         g = GModel(model.agent)
-        mg = _ModelGrounding(self, model, g, estimate)
+        mg = _ModelGrounding(self, model, g, estimate, who)
         for ag in agendas:
             for t in ag:
                 mg.mention(t)
@@ -562,8 +564,15 @@ class _ModelGrounding:
     done-condition; an abstract task's done-condition and its methods, one per binding of
     their own parameters whose precondition is not false before any action."""
 
-    def __init__(self, gr: _Grounder, model: AgentModel, g: GModel, estimate: bool) -> None:
+    def __init__(self, gr: _Grounder, model: AgentModel, g: GModel, estimate: bool,
+                 who: str = "") -> None:
         self.gr, self.model, self.g, self.estimate = gr, model, g, estimate
+        # C11: per operator name, the domain's metrics that count this agent's actions of it
+        self.counted: dict[str, list[DomainMetric]] = {}
+        for dm in gr.d.metrics.values():
+            if who and who in dm.agents():
+                for name in dm.actions:
+                    self.counted.setdefault(name, []).append(dm)
         self.calls: dict[int, tuple[str, tuple[str, ...]]] = {}
         self.todo: list[int] = []
         self.seen: set[int] = set()
@@ -654,6 +663,19 @@ class _ModelGrounding:
 
         yield from go(0)
 
+    def metric_tests(self, name: str, b: Mapping[Var, str]
+                     ) -> tuple[tuple[str, StateFn], ...]:
+        """C11: the domain's metrics that count this agent's action ``name`` with the
+        binding ``b``, each with its condition grounded and compiled once (a bitset test, as
+        a precondition is); a condition false whatever the state (static facts fold it)
+        leaves the metric out."""
+        out: list[tuple[str, StateFn]] = []
+        for dm in self.counted.get(name, ()):
+            f = self.gr.ground_f(dm.when, b)
+            if f != FALSE:
+                out.append((dm.name, self.gr.compile(f)))
+        return tuple(out)
+
     def one(self, t: int) -> None:
         """Ground task ``t``, mentioning the subtasks its methods reach."""
         gr, g, model = self.gr, self.g, self.model
@@ -669,7 +691,8 @@ class _ModelGrounding:
             done_f = gr.ground_f(op.done, b) if op.done is not None else None
             dict.__setitem__(g.ops, t, GOp(
                 t, gr.task_names[t], name, args, pre_f, gr.compile(pre_f), add, dele,
-                tuple(cond), cost, done_f, gr.compile(done_f) if done_f is not None else None))
+                tuple(cond), cost, done_f, gr.compile(done_f) if done_f is not None else None,
+                self.metric_tests(name, b)))
             return
         task = model.tasks.get(name)
         if task is None and self.estimate:
