@@ -1,0 +1,384 @@
+"""Metrics a domain declares (docs/concurrent.md C11, "Metrics a domain declares"): declared in
+the DSL, named by preference profiles beside the built-in metrics, counted by the planner's
+vectors and re-derived by the validator from the declaration. Every figure of the first tests
+was derived by hand from the rules before the planner was run; the derivation is in each
+test's docstring. Every policy is validated and walked through the Executor on all its
+branches (``solved``)."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import pytest
+
+import ehatp
+from ehatp import Domain, DomainError, Estimate, InputError, Objective, ObjectiveKind, Problem
+from ehatp.formats.policy import Policy
+from ehatp.model.formula import TRUE, Not
+from ehatp.search.planner import relabel
+
+from .conftest import EXAMPLES_DIR
+from .test_concurrent import JOINT, chores, replies, solved
+
+PREFS = EXAMPLES_DIR / "concurrent" / "stack-prefs.toml"
+PREFS10 = EXAMPLES_DIR / "concurrent" / "stack-prefs10.toml"
+
+# two cubes: c1 (position s1, the bottom) in the human's zone, c2 (s2) in the shared zone
+TWO = """
+[problem]
+name = "two-cubes"
+K = 1
+
+[domain]
+name = "stacking"
+
+[steps]
+mode = "concurrent"
+
+[objective]
+kind = "preferences"
+profile = "builder"
+estimate = "worst-case"
+
+[objective.profiles]
+builder = ["shared_taken", "makespan"]
+hurry = ["makespan", "shared_taken"]
+
+[objects]
+cube = ["c1", "c2"]
+position = ["s1", "s2"]
+
+[init]
+true = ["handempty(R)", "handempty(H)", "ontable(c1)", "ontable(c2)", "zone(c1, hzone)",
+        "zone(c2, shared)", "target(c1, s1)", "target(c2, s2)", "bottom(s1)",
+        "below(s1, s2)"]
+
+[agenda]
+robot = ["stack"]
+human = ["stack"]
+"""
+
+
+def two_cubes(tmp_path: Path, profile: str, estimate: str) -> Problem:
+    f = tmp_path / "two.toml"
+    f.write_text(TWO.replace('profile = "builder"', f'profile = "{profile}"')
+                 .replace('estimate = "worst-case"', f'estimate = "{estimate}"'),
+                 encoding="utf-8")
+    return ehatp.load(f)
+
+
+BUILDER = {  # the robot leaves c2 to the human; it picks c2 only after a pass
+    ("pick(c1)",): "wait", ("pick(c1)", "place(c1, s1)"): "wait",
+    ("pick(c1)", "place(c1, s1)", "pick(c2)"): "wait",
+    ("pick(c1)", "place(c1, s1)", "pick(c2)", "place(c2, s2)"): "wait",
+    ("pick(c1)", "place(c1, s1)", "pass"): "pick(c2)",
+    ("pick(c1)", "place(c1, s1)", "pass", "pass"): "place(c2, s2)",
+    ("pick(c1)", "pass"): "pick(c2)", ("pick(c1)", "pass", "place(c1, s1)"): "wait",
+    ("pick(c1)", "pass", "place(c1, s1)", "pass"): "place(c2, s2)"}
+HURRY = {  # the robot picks c2 while the human places c1
+    ("pick(c1)",): "wait", ("pick(c1)", "place(c1, s1)"): "pick(c2)",
+    ("pick(c1)", "place(c1, s1)", "pass"): "place(c2, s2)",
+    ("pick(c1)", "pass"): "pick(c2)", ("pick(c1)", "pass", "place(c1, s1)"): "wait",
+    ("pick(c1)", "pass", "place(c1, s1)", "pass"): "place(c2, s2)"}
+
+
+@pytest.mark.parametrize(("profile", "estimate", "want", "value"), [
+    ("builder", "optimistic", BUILDER, [0, 4]),
+    ("hurry", "optimistic", HURRY, [3, 1]),
+    ("builder", "worst-case", HURRY, [1, 4]),
+    ("hurry", "worst-case", HURRY, [4, 1]),
+])
+def test_a_builder_profile_leaves_the_shared_cube_to_the_human(
+        tmp_path: Path, profile: str, estimate: str, want: dict[tuple[str, ...], str],
+        value: list[int]) -> None:
+    """By hand, on two cubes: ``c1`` (the bottom) in the human's zone, ``c2`` shared; the
+    human first, always together; ``shared_taken`` counts the robot's ``pick`` of a cube whose
+    zone is ``shared``. A vector below is (shared_taken, makespan) for ``builder``,
+    (makespan, shared_taken) for ``hurry``, counted from the node named.
+    - Root: only ``c1`` is wanted, and the robot cannot reach it, so the robot has no real
+      action and the human may not pass (C5): ``pick(c1)``, and the robot waits. 1 step.
+    - D1 (the human holds ``c1``; ``c2`` is now wanted): the human places ``c1``, or passes
+      (the robot has a real action, ``pick(c2)``).
+      - R_A, after ``place(c1, s1)``: the robot picks ``c2`` (admissible: still wanted after
+        the placement, no common resource) — A1: then the human has nothing to do and
+        passes while the robot places: shared 1, 2 steps; or it waits — A2: then the human
+        picks ``c2`` (the robot can only wait), then places it (the robot has nothing, so
+        the human may not pass): shared 0, 3 steps; or passes, and the robot must pick
+        ``c2`` (no (pass, wait)) and place it: shared 1, 3 steps.
+      - R_B, after ``pass``: the robot must pick ``c2``; then it is blocked (``s1`` is not
+        filled), so the human places ``c1`` while the robot waits; then the human passes and
+        the robot places: shared 1, 3 steps.
+    Optimistic (a human node takes its best branch): A2 is (0, 3) for builder, (3, 0) for
+    hurry; A1 is (1, 2) and (2, 1): builder waits, hurry picks ``c2``. D1 = min(R_A, R_B =
+    (1, 3) / (3, 1)): builder (0, 3), hurry (2, 1); the root adds the first step: builder
+    (0, 4), hurry (3, 1).
+    Worst case: A2 is max((0, 3), (1, 3)) = (1, 3) for builder, max((3, 0), (3, 1)) = (3, 1)
+    for hurry: A1 wins for both (the human who passes would force the robot to take ``c2``
+    anyway), so both pick ``c2``: the same replies. D1 = max(R_A, R_B): builder (1, 3),
+    hurry (3, 1); root (1, 4) and (4, 1)."""
+    policy = solved(two_cubes(tmp_path, profile, estimate))
+    assert replies(policy) == want
+    assert policy.objective["value"] == value
+    assert policy.objective["domain_metrics"] == {"shared_taken": {
+        "agent": "robot", "actions": ["pick"], "when": "zone(?c, shared)",
+        "doc": "the cubes the robot takes from the shared zone"}}
+
+
+def early_robot() -> Problem:
+    """E1 (tests/test_concurrent.py: the robot puts ``a``, the human puts ``b``, always
+    together) with two metrics: ``early_robot``, the robot's ``put`` while ``b`` is not placed
+    yet, and ``late_put``, a ``put`` by either agent while ``a`` is placed already."""
+    p = chores(JOINT)
+    d = p.domain
+    x = d.robot.operators["put"].params[0]
+    placed = d.predicates["placed"]
+    d.metric("early_robot", agent="robot", actions=["put"], when=Not(placed("b")))
+    d.metric("late_put", agent="either", actions=["put"], when=placed("a"))
+    d.metric("puts", agent="either", actions=[d.human.operators["put"]])
+    assert x in d.human.operators["put"].params
+    return p
+
+
+def prefer(p: Problem, profile: tuple[str, ...], estimate: Estimate = Estimate.WORST_CASE,
+           first: ehatp.StepFirst = ehatp.StepFirst.HUMAN) -> Problem:
+    return dataclasses.replace(p, steps=dataclasses.replace(p.steps, first=first),
+                               objective=Objective(ObjectiveKind.PREFERENCES, profile="p",
+                                                   profiles={"p": profile},
+                                                   estimate=estimate))
+
+
+def test_a_condition_is_read_in_the_state_at_the_step_s_start() -> None:
+    """By hand, E1 with ``early_robot`` (the robot puts ``a`` while ``b`` is not placed).
+    Root: ``put(b)`` or pass (the robot has a real action).
+    - ``put(b)``: the robot's ``put(a)`` in the same step counts — ``b`` is not placed at the
+      step's start, although it is after (early_robot 1, 1 step); or it waits, and puts
+      ``a`` next step while the human, with nothing left, passes: ``b`` is placed then
+      (0, 2 steps).
+    - pass: the robot must put ``a`` (no (pass, wait)), ``b`` not placed: 1; then the human
+      puts ``b`` while the robot waits: (1, 2).
+    Profile (early_robot, makespan), worst case: after ``put(b)`` the robot waits ((0, 2)
+    against (1, 1)); root max((0, 2), (1, 2)) = (1, 2). Optimistic: the same replies, root
+    min = (0, 2). Reading the condition after the step instead would count nothing on the
+    ``put(b)`` branch and make ``put(a)`` the reply."""
+    want = {("put(b)",): "wait", ("put(b)", "pass"): "put(a)", ("pass",): "put(a)",
+            ("pass", "put(b)"): "wait"}
+    for estimate, value in ((Estimate.WORST_CASE, [1, 2]), (Estimate.OPTIMISTIC, [0, 2])):
+        policy = solved(prefer(early_robot(), ("early_robot", "makespan"), estimate))
+        assert (replies(policy), policy.objective["value"]) == (want, value)
+
+
+def test_either_agent_counts_a_step_once() -> None:
+    """By hand, E1 with ``puts`` (a ``put`` by either agent, counted per step) beside the
+    built-in ``effort`` (each action). The ``put(b)`` branch is one step in which both put:
+    puts 1, effort 2; the pass branch is two steps, one put each: puts 2, effort 2. Profile
+    (puts, effort), worst case: root max((1, 2), (2, 2)) = (2, 2); optimistic (1, 2).
+    ``late_put`` (either agent's ``put`` while ``a`` is placed at the step's start): the
+    ``put(b)`` branch 0, the pass branch 1 (the human's ``put(b)`` in step 2): worst case 1,
+    optimistic 0."""
+    for profile, estimate, value in ((("puts", "effort"), Estimate.WORST_CASE, [2, 2]),
+                                     (("puts", "effort"), Estimate.OPTIMISTIC, [1, 2]),
+                                     (("late_put",), Estimate.WORST_CASE, [1]),
+                                     (("late_put",), Estimate.OPTIMISTIC, [0])):
+        assert solved(prefer(early_robot(), profile, estimate)).objective["value"] == value
+
+
+def test_with_the_robot_first_both_moves_of_a_step_are_counted() -> None:
+    """By hand, E1 with ``[steps] first = "robot"`` (C4: the robot decides, the human replies
+    beside it: beside an action it may pass, beside ``wait`` it may not).
+    - ``put(a)`` first: the human puts ``b`` too (1 step), or passes, then the robot, with
+      nothing left, waits while the human puts ``b`` (2 steps). early_robot 1 on both
+      (``b`` not placed at step 1's start); late_put: 0, and 1 on the pass branch (the
+      human's ``put(b)`` at step 2, ``a`` placed at its start: the reply's own action).
+    - ``wait`` first: the human must put ``b``; then the robot puts ``a`` while the human
+      passes: 2 steps, early_robot 0 (``b`` placed at step 2's start), late_put 0.
+    (early_robot, makespan): put first (1, 2) worst / (1, 1) optimistic, wait first (0, 2):
+    the robot waits either way, root (0, 2). (late_put, makespan): put first (1, 2) worst,
+    (0, 1) optimistic; wait first (0, 2): worst case waits, root (0, 2); optimistic puts,
+    root (0, 1)."""
+    robot = ehatp.StepFirst.ROBOT
+    for profile, estimate, value, move in (
+            (("early_robot", "makespan"), Estimate.WORST_CASE, [0, 2], "wait"),
+            (("early_robot", "makespan"), Estimate.OPTIMISTIC, [0, 2], "wait"),
+            (("late_put", "makespan"), Estimate.WORST_CASE, [0, 2], "wait"),
+            (("late_put", "makespan"), Estimate.OPTIMISTIC, [0, 1], "put(a)")):
+        policy = solved(prefer(early_robot(), profile, estimate, robot))
+        assert (policy.objective["value"], policy.root.moves[0].action) == (value, move)
+
+
+# --- the shipped examples --------------------------------------------------------------------
+
+def same_bytes(a: Policy, b: Policy, tmp_path: Path) -> bool:
+    a.write(tmp_path / "a.json")
+    b.write(tmp_path / "b.json")
+    return (tmp_path / "a.json").read_bytes() == (tmp_path / "b.json").read_bytes()
+
+
+def partings(a: dict[tuple[str, ...], str], b: dict[tuple[str, ...], str]
+             ) -> list[tuple[tuple[str, ...], str, str]]:
+    """Where two policies' replies first part: the human's moves so far, ``a``'s reply and
+    ``b``'s, every earlier reply on the way the same."""
+    return [(k, a[k], b[k]) for k in sorted(set(a) & set(b), key=lambda k: (len(k), k))
+            if a[k] != b[k] and all(a.get(k[:i]) == b.get(k[:i]) for i in range(1, len(k)))]
+
+
+@pytest.mark.parametrize(("path", "shared"), [(PREFS, "c2"), (PREFS10, "c10")],
+                         ids=["4", "10"])
+def test_the_example_s_profiles_give_different_replies(path: Path, shared: str) -> None:
+    """``stack-prefs`` (4 cubes: ``c1`` the human's, ``c2`` and ``c3`` shared, ``c4`` the
+    robot's) and ``stack-prefs10`` (stack10's table), optimistic, as shipped. The profiles
+    part only where the human holds a cube of its own zone and the shared cube above it is
+    wanted: ``hurry`` picks the shared cube at once, ``builder`` waits (as on two cubes,
+    derived by hand above). Elsewhere the rules leave the robot no such choice: a shared
+    cube above one of the robot's is picked by the human while the robot holds its own.
+    In ``stack-prefs`` that is once (``c2``, after the human picks and places ``c1``); in
+    stack10's table only ``c10`` is above a cube of the human's zone. Each profile's policy
+    is valid; the root vectors are read from the policies."""
+    kept = ehatp.solve(ehatp.load(path), keep_graph=True)
+    assert kept.graph is not None and kept.optimal
+    problem = ehatp.load(path)
+    got = {}
+    for name in ("builder", "hurry"):
+        policy = relabel(kept, name)
+        mine = dataclasses.replace(problem, objective=problem.objective.with_profile(name))
+        assert ehatp.validate(mine, policy).ok
+        got[name] = (replies(policy), policy.objective["value"])
+    parted = partings(got["builder"][0], got["hurry"][0])
+    assert parted and {(b, h) for _, b, h in parted} == {("wait", f"pick({shared})")}
+    assert got["builder"][1][0] == 0 and got["hurry"][1][1] > 0
+    if path == PREFS:
+        assert [k for k, _, _ in parted] == [("pick(c1)", "place(c1, s1)")]
+        assert (got["builder"][1], got["hurry"][1]) == ([0, 7], [5, 1])
+
+
+@pytest.mark.parametrize("path", [PREFS, PREFS10], ids=["4", "10"])
+def test_relabelling_with_domain_metrics_is_a_fresh_solve_byte_for_byte(
+        path: Path, tmp_path: Path) -> None:
+    """C11: one search, relabelled for each profile under both estimates, writes exactly the
+    file a fresh solve with that profile writes; solving twice writes the same bytes."""
+    base = ehatp.load(path)
+    for estimate in Estimate:
+        p = dataclasses.replace(base, objective=dataclasses.replace(base.objective,
+                                                                     estimate=estimate))
+        kept = ehatp.solve(p, keep_graph=True)
+        for name in ("builder", "hurry"):
+            mine = dataclasses.replace(p, objective=p.objective.with_profile(name))
+            fresh = ehatp.solve(mine).policy
+            again = ehatp.solve(mine).policy
+            assert fresh is not None and again is not None
+            assert same_bytes(relabel(kept, name), fresh, tmp_path), (name, estimate)
+            assert same_bytes(fresh, again, tmp_path)
+
+
+def test_the_relabel_command_writes_the_solve_command_s_files(tmp_path: Path) -> None:
+    """``ehatp relabel stack-prefs.toml --profile builder --profile hurry --out
+    'p-{profile}.json'`` (the README's command) writes, for each profile, the bytes ``ehatp
+    solve`` writes with that profile chosen, and says each root vector."""
+    from typer.testing import CliRunner
+
+    from ehatp.cli.app import app
+
+    runner = CliRunner()
+    out = runner.invoke(app, ["relabel", str(PREFS), "--profile", "builder", "--profile",
+                              "hurry", "--out", str(tmp_path / "p-{profile}.json")])
+    assert out.exit_code == 0, out.output
+    assert "builder: shared_taken 0, makespan 7" in out.output
+    assert "hurry: makespan 5, shared_taken 1" in out.output
+    for name in ("builder", "hurry"):
+        f = tmp_path / f"{name}.toml"
+        f.write_text(PREFS.read_text(encoding="utf-8").replace('profile = "builder"',
+                                                               f'profile = "{name}"'),
+                     encoding="utf-8")
+        solved_out = runner.invoke(app, ["solve", str(f), "-o", str(tmp_path / "s.json")])
+        assert solved_out.exit_code == 0, solved_out.output
+        assert (tmp_path / f"p-{name}.json").read_bytes() == (tmp_path / "s.json").read_bytes()
+        assert json.loads((tmp_path / "s.json").read_text())["objective"]["profile"] == name
+
+
+# --- the validator reads the declaration -----------------------------------------------------
+
+def test_the_validator_catches_a_changed_vector_of_a_domain_metric(tmp_path: Path) -> None:
+    """A recorded vector changed by hand is caught, naming the node and the metrics."""
+    problem = two_cubes(tmp_path, "builder", "optimistic")
+    policy = solved(problem)
+    policy.objective["vectors"][0] = [1, 4]
+    policy.objective["value"] = [1, 4]
+    report = ehatp.validate(problem, policy)
+    assert not report.ok and "shared_taken/makespan" in report.message
+
+
+def test_the_validator_counts_from_the_domain_s_declaration(tmp_path: Path) -> None:
+    """The policy solved with ``shared_taken`` (the robot's picks in the shared zone) does not
+    validate against a domain that declares it as the robot's picks in the human's zone: the
+    recorded declaration differs; and with that declaration recorded too, the vectors the
+    validator re-derives from the declaration it reads differ (on two cubes the robot never
+    picks ``c1``, so it counts 0 where the policy records 1, e.g. after the human's pass)."""
+    problem = two_cubes(tmp_path, "builder", "optimistic")
+    policy = solved(problem)
+    other = problem.domain
+    c = other.robot.operators["pick"].params[0]
+    zone = other.predicates["zone"]
+    other.metrics.clear()
+    other.metric("shared_taken", agent="robot", actions=["pick"], when=zone(c, "hzone"),
+                 doc="the cubes the robot takes from the shared zone")
+    report = ehatp.validate(problem, policy)
+    assert not report.ok
+    assert "domain_metrics" in report.message and "zone(?c, hzone)" in report.message
+    # the same declaration recorded, the vectors alone tell them apart
+    policy.objective["domain_metrics"]["shared_taken"]["when"] = "zone(?c, hzone)"
+    report = ehatp.validate(problem, policy)
+    assert not report.ok and "shared_taken/makespan" in report.message
+
+
+# --- mistakes --------------------------------------------------------------------------------
+
+def test_an_unknown_metric_is_one_line_naming_every_metric(tmp_path: Path) -> None:
+    """A profile naming a metric neither built in nor declared: one line naming the file, the
+    place and every metric that exists, built in and the domain's."""
+    f = tmp_path / "p.toml"
+    f.write_text(PREFS.read_text(encoding="utf-8").replace(
+        'builder = ["shared_taken", "makespan"]', 'builder = ["shared_token", "makespan"]'),
+        encoding="utf-8")
+    with pytest.raises(InputError) as e:
+        ehatp.load(f)
+    line = e.value.line()
+    assert "\n" not in line and line.startswith(f"{f}:")
+    assert "[objective.profiles] builder: unknown metric 'shared_token'" in line
+    assert '"makespan"' in line and '"communications"' in line
+    assert '"shared_taken" (the domain\'s)' in line
+
+
+def test_an_unknown_metric_from_python_is_refused() -> None:
+    """A Problem built in Python is checked as a file is (one line, the metrics named)."""
+    with pytest.raises(InputError, match="unknown metric 'speed'.*the domain declares none"):
+        ehatp.solve(prefer(chores(JOINT), ("speed",)))
+
+
+@pytest.mark.parametrize(("kwargs", "says"), [
+    ({"name": "Shared"}, "lower case"),
+    ({"name": "makespan"}, "built-in metric"),
+    ({"agent": "robots"}, "agent 'robots'"),
+    ({"actions": ["fly"]}, "'fly' is not an action of R"),
+    ({"actions": []}, "at least one action"),
+    ({"when": "placed(a)"}, "not a formula"),
+])
+def test_a_bad_metric_declaration_is_a_domain_error(kwargs: dict[str, object],
+                                                    says: str) -> None:
+    d = chores(JOINT).domain
+    args: dict[str, object] = {"name": "m", "agent": "robot", "actions": ["put"],
+                               "when": TRUE, **kwargs}
+    with pytest.raises(DomainError, match=says):
+        d.metric(str(args.pop("name")), **args)  # type: ignore[arg-type]
+
+
+def test_a_metric_is_declared_once_and_its_condition_uses_the_action_s_parameters() -> None:
+    d = Domain("m", robot="R", human="H")
+    x, y = ehatp.Var("x", d.type("thing")), ehatp.Var("y", "thing")
+    placed = d.predicate("placed", x)
+    d.robot.action("put", x, pre=~placed(x), effects=[placed(x)])
+    d.metric("puts", agent="robot", actions=["put"])
+    with pytest.raises(DomainError, match="declared twice"):
+        d.metric("puts", agent="robot", actions=["put"])
+    with pytest.raises(DomainError, match="unbound y"):
+        d.metric("other", agent="robot", actions=["put"], when=placed(y))
