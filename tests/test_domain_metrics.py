@@ -382,3 +382,39 @@ def test_a_metric_is_declared_once_and_its_condition_uses_the_action_s_parameter
         d.metric("puts", agent="robot", actions=["put"])
     with pytest.raises(DomainError, match="unbound y"):
         d.metric("other", agent="robot", actions=["put"], when=placed(y))
+
+
+# --- from an HDDL sidecar --------------------------------------------------------------------
+
+def test_an_hddl_sidecar_declares_metrics(tmp_path: Path) -> None:
+    """docs/hddl.md: ``[metrics.NAME]`` in the sidecar becomes ``d.metric(...)`` in the
+    written module (the actions by name, ``when`` literals over the parameters they share);
+    an unknown action, a bad agent, a parameter not every action has, or an agent without a
+    model is one line."""
+    pytest.importorskip("unified_planning", reason="ehatp[hddl] (unified-planning) not installed")
+    from ehatp.formats import hddl
+
+    data = Path(__file__).parent / "data" / "hddl"
+
+    def imported(table: str) -> Domain:
+        side = tmp_path / "side.toml"
+        side.write_text(table, encoding="utf-8")
+        return hddl.import_hddl(data / "transport-domain.hddl", data / "transport-p1.hddl",
+                                sidecar=side).domain()
+
+    d = imported('[metrics.loads]\nagent = "either"\nactions = ["load", "unload"]\n'
+                 'when = ["at(?t, ?p)", "not road(?p, ?p)"]\ndoc = "loads and unloads"\n')
+    m = d.metrics["loads"]
+    assert (m.agent, m.actions, str(m.when), m.doc) == (
+        "either", ("load", "unload"), "at(?t, ?p) and not road(?p, ?p)", "loads and unloads")
+    for table, says in (
+            ('[metrics.m]\nagent = "robot"\nactions = ["fly"]\n', "'fly'"),
+            ('[metrics.m]\nagent = "robots"\nactions = ["drive"]\n', "agent = 'robots'"),
+            ('[metrics.M]\nagent = "robot"\nactions = ["drive"]\n', "lower case"),
+            ('[metrics.m]\nagent = "robot"\nactions = ["drive", "load"]\n'
+             'when = ["road(?from, ?to)"]\n', r"\?from, which is not a parameter"),
+            ('[metrics.m]\nagent = "human"\nactions = ["drive"]\n', "only the robot has"),
+            ('[metrics.m]\nagent = "robot"\n', "actions")):
+        with pytest.raises(hddl.HddlUnsupported, match=says) as e:
+            imported(table)
+        assert "\n" not in str(e.value)

@@ -305,6 +305,7 @@ class _Converter:
         self.module_file = module_file
         self.names = _Names()
         self.vars: dict[tuple[str, str], str] = {}  # (name, type) -> identifier
+        self.action_env: dict[str, dict[str, str]] = {}  # action -> its parameters' idents
         self.lines: list[str] = []
         self.notes: list[str] = []
 
@@ -463,6 +464,7 @@ class _Converter:
             L += ["", "    # the human expects nothing of the robot (the sidecar): it sees what "
                   "the robot does,", "    # and follows no plan of it",
                   "    d.robot_seen_by_human = AgentModel(d.robot_name)"]
+        self.metrics()
         goal = self.goal()
         if side.customize is not None:
             L += ["", "    # the Python sidecar's customize(d)",
@@ -625,10 +627,44 @@ class _Converter:
         args.append(f"effects=[{', '.join(effs)}]")
         if cost != 1:
             args.append(f"cost={cost}")
+        self.action_env[a.name] = env
         held = self.side.resources.get(a.name)
         if held:
             args.append(f"resources=[{', '.join(self.resource(a.name, x, env) for x in held)}]")
         self.lines.append(self.wrap(f"    {self.names.get('task', a.name)} = m.action(", args))
+
+    def metrics(self) -> None:
+        """The sidecar's ``[metrics]`` as ``d.metric(...)`` lines (docs/concurrent.md C11):
+        the actions by name, ``when`` over the parameters the actions share (``?x``)."""
+        side = self.side
+        for name, m in sorted(side.metrics.items()):
+            where = f"{side.source}: [metrics.{name}]"
+            unknown = [a for a in m.actions if a not in self.action_env]
+            if unknown:
+                raise self.unsupported(f"{where} names {unknown[0]!r}, which is not an "
+                                       "action of the domain")
+            if (m.agent not in (self.agent, "either") and side.other != "same"
+                    and side.customize is None):
+                raise self.unsupported(f"{where}: agent = {m.agent!r}, but only the "
+                                       f"{self.agent} has the HDDL model; add [other] model "
+                                       f'= "same", or count the {self.agent}\'s actions')
+            env = self.action_env[m.actions[0]]
+            for text in m.when:
+                for x in literal(text, where)[2]:
+                    if x.startswith("?") and any(self.action_env[a].get(x[1:]) != env.get(x[1:])
+                                                 for a in m.actions):
+                        raise self.unsupported(f"{where}: when reads {x}, which is not a "
+                                               "parameter (of one type) of every action it "
+                                               f"counts ({', '.join(m.actions)})")
+            args = [_q(name), f"agent={_q(m.agent)}",
+                    f"actions=[{', '.join(_q(a) for a in m.actions)}]"]
+            if m.when:
+                args.append(f"when={self.lits(m.when, env, f'[metrics.{name}]')}")
+            if m.doc:
+                args.append(f"doc={_q(m.doc)}")
+            if name == sorted(side.metrics)[0]:
+                self.lines += ["", "    # metrics a preference profile may name (the sidecar)"]
+            self.lines.append(self.wrap("    d.metric(", args))
 
     def resource(self, action: str, x: str, env: dict[str, str]) -> str:
         """A ``[resources]`` entry of the sidecar as the DSL writes it: ``?x`` the action's
