@@ -180,7 +180,8 @@ def check_preferences(rp: Replay, order: list[int]) -> None:
     declared = problem.domain.metrics
     if not isinstance(names, list) or not isinstance(vectors, list) \
             or len(vectors) != len(pol.nodes) \
-            or any(m not in list(Metric) and m not in declared for m in names):
+            or any(not isinstance(m, str) or m not in list(Metric) and m not in declared
+                   for m in names):
         rp.fail([], "a preferences policy records objective.metrics (built in or the "
                 "domain's) and one vector per node (objective.vectors) (C11)")
         return
