@@ -846,6 +846,8 @@ class Domain:
                               + ", ".join(repr(a) for a in METRIC_AGENTS))
         if not isinstance(when, Formula):
             raise DomainError(f"{where}: when is {when!r}, not a formula")
+        if not isinstance(doc, str):
+            raise DomainError(f"{where}: doc is {doc!r}, not a string")
         names: list[str] = []
         for a in actions:
             n = a.name if isinstance(a, Operator) else a
