@@ -335,6 +335,32 @@ def test_the_validator_counts_from_the_domain_s_declaration(tmp_path: Path) -> N
     assert not report.ok and "shared_taken/makespan" in report.message
 
 
+def test_the_policy_file_records_the_declaration_and_its_schema_checks_it(
+        tmp_path: Path) -> None:
+    """docs/policy-format.md: ``objective.domain_metrics`` holds the declaration of each
+    domain metric the profile names; a wrong agent is one line naming the place (the schema),
+    and a file without the declaration reads but is invalid for a profile that names one."""
+    from ehatp.formats.policy_check import read_policy
+
+    problem = ehatp.load(PREFS)
+    policy = ehatp.solve(problem).policy
+    assert policy is not None
+    policy.write(tmp_path / "p.json")
+    data = json.loads((tmp_path / "p.json").read_text(encoding="utf-8"))
+    assert data["objective"]["metrics"] == ["shared_taken", "makespan"]
+    assert list(data["objective"]["domain_metrics"]) == ["shared_taken"]
+    data["objective"]["domain_metrics"]["shared_taken"]["agent"] = "everyone"
+    (tmp_path / "bad.json").write_text(json.dumps(data), encoding="utf-8")
+    with pytest.raises(InputError) as e:
+        read_policy(tmp_path / "bad.json")
+    assert "objective.domain_metrics.shared_taken.agent" in str(e.value)
+    assert "\n" not in str(e.value)
+    del data["objective"]["domain_metrics"]
+    (tmp_path / "old.json").write_text(json.dumps(data), encoding="utf-8")
+    report = ehatp.validate(problem, read_policy(tmp_path / "old.json"))
+    assert not report.ok and "domain_metrics is {}" in report.message
+
+
 # --- mistakes --------------------------------------------------------------------------------
 
 def test_an_unknown_metric_is_one_line_naming_every_metric(tmp_path: Path) -> None:
