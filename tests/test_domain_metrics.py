@@ -420,7 +420,7 @@ def test_an_hddl_sidecar_declares_metrics(tmp_path: Path) -> None:
     """docs/hddl.md: ``[metrics.NAME]`` in the sidecar becomes ``d.metric(...)`` in the
     written module (the actions by name, ``when`` literals over the parameters they share);
     an unknown action, a bad agent, a parameter not every action has, or an agent without a
-    model is one line."""
+    model is one line at the sidecar."""
     pytest.importorskip("unified_planning", reason="ehatp[hddl] (unified-planning) not installed")
     from ehatp.formats import hddl
 
@@ -447,7 +447,8 @@ def test_an_hddl_sidecar_declares_metrics(tmp_path: Path) -> None:
             ('[metrics.m]\nagent = "robot"\n', "actions")):
         with pytest.raises(hddl.HddlUnsupported, match=says) as e:
             imported(table)
-        assert "\n" not in str(e.value)
+        line = str(e.value)
+        assert "\n" not in line and line.startswith(f"{tmp_path / 'side.toml'}: ")
 
 
 def random_agreement(seeds: Iterable[int]) -> tuple[int, int]:

@@ -635,27 +635,28 @@ class _Converter:
 
     def metrics(self) -> None:
         """The sidecar's ``[metrics]`` as ``d.metric(...)`` lines (docs/concurrent.md C11):
-        the actions by name, ``when`` over the parameters the actions share (``?x``)."""
+        the actions by name, ``when`` over the parameters the actions share (``?x``). A
+        mistake is one line at the sidecar (the file at fault)."""
         side = self.side
         for name, m in sorted(side.metrics.items()):
             where = f"{side.source}: [metrics.{name}]"
             unknown = [a for a in m.actions if a not in self.action_env]
             if unknown:
-                raise self.unsupported(f"{where} names {unknown[0]!r}, which is not an "
-                                       "action of the domain")
+                raise HddlUnsupported(f"{where} names {unknown[0]!r}, which is not an "
+                                      "action of the domain")
             if (m.agent not in (self.agent, "either") and side.other != "same"
                     and side.customize is None):
-                raise self.unsupported(f"{where}: agent = {m.agent!r}, but only the "
-                                       f"{self.agent} has the HDDL model; add [other] model "
-                                       f'= "same", or count the {self.agent}\'s actions')
+                raise HddlUnsupported(f"{where}: agent = {m.agent!r}, but only the "
+                                      f"{self.agent} has the HDDL model; add [other] model "
+                                      f'= "same", or count the {self.agent}\'s actions')
             env = self.action_env[m.actions[0]]
             for text in m.when:
                 for x in literal(text, where)[2]:
                     if x.startswith("?") and any(self.action_env[a].get(x[1:]) != env.get(x[1:])
                                                  for a in m.actions):
-                        raise self.unsupported(f"{where}: when reads {x}, which is not a "
-                                               "parameter (of one type) of every action it "
-                                               f"counts ({', '.join(m.actions)})")
+                        raise HddlUnsupported(f"{where}: when reads {x}, which is not a "
+                                              "parameter (of one type) of every action it "
+                                              f"counts ({', '.join(m.actions)})")
             args = [_q(name), f"agent={_q(m.agent)}",
                     f"actions=[{', '.join(_q(a) for a in m.actions)}]"]
             if m.when:
