@@ -278,7 +278,7 @@ def test_relabelling_with_domain_metrics_is_a_fresh_solve_byte_for_byte(
 def test_the_relabel_command_writes_the_solve_command_s_files(tmp_path: Path) -> None:
     """``ehatp relabel stack-prefs.toml --profile builder --profile hurry --out
     'p-{profile}.json'`` (the README's command) writes, for each profile, the bytes ``ehatp
-    solve`` writes with that profile chosen, and says each root vector."""
+    solve`` writes with that profile chosen; both say the root's vector."""
     from typer.testing import CliRunner
 
     from ehatp.cli.app import app
@@ -296,6 +296,8 @@ def test_the_relabel_command_writes_the_solve_command_s_files(tmp_path: Path) ->
                      encoding="utf-8")
         solved_out = runner.invoke(app, ["solve", str(f), "-o", str(tmp_path / "s.json")])
         assert solved_out.exit_code == 0, solved_out.output
+        vector = {"builder": "shared_taken 0, makespan 7", "hurry": "makespan 5, shared_taken 1"}
+        assert f"profile         {name} (optimistic): {vector[name]}" in solved_out.output
         assert (tmp_path / f"p-{name}.json").read_bytes() == (tmp_path / "s.json").read_bytes()
         assert json.loads((tmp_path / "s.json").read_text())["objective"]["profile"] == name
 
