@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any
 from ..errors import HddlMissing, HddlUnsupported, control_char
 from ..model.domain import Domain
 from ..model.problem import BeliefWorld, Limits, Problem
-from .hddl_sidecar import AGENTS, Sidecar, literal, read_sidecar
+from .hddl_sidecar import AGENTS, Sidecar, check_metrics, literal, read_sidecar
 
 if TYPE_CHECKING:  # unified-planning is optional (ehatp[hddl])
     from unified_planning.model import FNode
@@ -464,7 +464,9 @@ class _Converter:
             L += ["", "    # the human expects nothing of the robot (the sidecar): it sees what "
                   "the robot does,", "    # and follows no plan of it",
                   "    d.robot_seen_by_human = AgentModel(d.robot_name)"]
-        self.metrics()
+        if side.metrics:
+            L += ["", "    # metrics a preference profile may name (the sidecar)"]
+            self.metrics()
         goal = self.goal()
         if side.customize is not None:
             L += ["", "    # the Python sidecar's customize(d)",
@@ -634,37 +636,17 @@ class _Converter:
         self.lines.append(self.wrap(f"    {self.names.get('task', a.name)} = m.action(", args))
 
     def metrics(self) -> None:
-        """The sidecar's ``[metrics]`` as ``d.metric(...)`` lines (docs/concurrent.md C11):
-        the actions by name, ``when`` over the parameters the actions share (``?x``). A
-        mistake is one line at the sidecar (the file at fault)."""
-        side = self.side
-        for name, m in sorted(side.metrics.items()):
-            where = f"{side.source}: [metrics.{name}]"
-            unknown = [a for a in m.actions if a not in self.action_env]
-            if unknown:
-                raise HddlUnsupported(f"{where} names {unknown[0]!r}, which is not an "
-                                      "action of the domain")
-            if (m.agent not in (self.agent, "either") and side.other != "same"
-                    and side.customize is None):
-                raise HddlUnsupported(f"{where}: agent = {m.agent!r}, but only the "
-                                      f"{self.agent} has the HDDL model; add [other] model "
-                                      f'= "same", or count the {self.agent}\'s actions')
-            env = self.action_env[m.actions[0]]
-            for text in m.when:
-                for x in literal(text, where)[2]:
-                    if x.startswith("?") and any(self.action_env[a].get(x[1:]) != env.get(x[1:])
-                                                 for a in m.actions):
-                        raise HddlUnsupported(f"{where}: when reads {x}, which is not a "
-                                              "parameter (of one type) of every action it "
-                                              f"counts ({', '.join(m.actions)})")
+        """The sidecar's ``[metrics]`` (checked: :func:`~.hddl_sidecar.check_metrics`) as
+        ``d.metric(...)`` lines (docs/concurrent.md C11)."""
+        check_metrics(self.side, self.agent, self.action_env)
+        for name, m in sorted(self.side.metrics.items()):
             args = [_q(name), f"agent={_q(m.agent)}",
                     f"actions=[{', '.join(_q(a) for a in m.actions)}]"]
-            if m.when:
+            if m.when:  # over the parameters the actions share (check_metrics)
+                env = self.action_env[m.actions[0]]
                 args.append(f"when={self.lits(m.when, env, f'[metrics.{name}]')}")
             if m.doc:
                 args.append(f"doc={_q(m.doc)}")
-            if name == sorted(side.metrics)[0]:
-                self.lines += ["", "    # metrics a preference profile may name (the sidecar)"]
             self.lines.append(self.wrap("    d.metric(", args))
 
     def resource(self, action: str, x: str, env: dict[str, str]) -> str:

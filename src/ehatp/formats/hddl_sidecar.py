@@ -226,6 +226,31 @@ def _sidecar_from(data: Mapping[str, Any], where: str, check: bool = True) -> Si
     return s
 
 
+def check_metrics(side: Sidecar, agent: str, params: Mapping[str, Mapping[str, str]]) -> None:
+    """Raise :class:`HddlUnsupported`, naming the sidecar, unless every ``[metrics.NAME]``
+    names actions of the domain (``params``: each action's parameters, by name, as the
+    written module names them), counts an agent that has a model (``agent`` has the HDDL
+    one; the other needs ``[other] model = "same"`` or a Python sidecar), and reads in
+    ``when`` only parameters every one of its actions has (docs/concurrent.md C11)."""
+    for name, m in sorted(side.metrics.items()):
+        where = f"{side.source}: [metrics.{name}]"
+        unknown = [a for a in m.actions if a not in params]
+        if unknown:
+            raise HddlUnsupported(f"{where} names {unknown[0]!r}, which is not an action of "
+                                  "the domain")
+        if m.agent not in (agent, "either") and side.other != "same" and side.customize is None:
+            raise HddlUnsupported(f"{where}: agent = {m.agent!r}, but only the {agent} has the "
+                                  f'HDDL model; add [other] model = "same", or count the '
+                                  f"{agent}'s actions")
+        for text in m.when:
+            for x in literal(text, where)[2]:
+                if x.startswith("?") and any(params[a].get(x[1:]) != params[m.actions[0]]
+                                             .get(x[1:]) for a in m.actions):
+                    raise HddlUnsupported(f"{where}: when reads {x}, which is not a parameter "
+                                          "(of one type) of every action it counts "
+                                          f"({', '.join(m.actions)})")
+
+
 _LIT = re.compile(r"^\s*(not\s+)?([A-Za-z_][\w\-]*)\s*(?:\((.*)\))?\s*$")
 _EQ = re.compile(r"^\s*(\??[\w\-]+)\s*(=|!=)\s*(\??[\w\-]+)\s*$")
 
@@ -244,4 +269,4 @@ def literal(text: str, where: str) -> tuple[bool, str, list[str]]:
 
 
 __all__ = ["AGENTS", "CLASSES", "METRIC_AGENTS", "SCHEMA", "Sidecar", "SidecarMetric",
-           "check_schema", "literal", "read_sidecar"]
+           "check_metrics", "check_schema", "literal", "read_sidecar"]

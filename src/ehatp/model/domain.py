@@ -870,6 +870,11 @@ class Domain:
         self.metrics[name] = m
         return m
 
+    def metrics_of(self, agent: str, action: str) -> list[DomainMetric]:
+        """C11: the declared metrics that count ``agent``'s (``"robot"`` or ``"human"``)
+        actions of the operator ``action``."""
+        return [m for m in self.metrics.values() if agent in m.agents() and action in m.actions]
+
     def _fresh_pred(self, name: str) -> None:
         if (name in self.predicates or name in self.derived_predicates
                 or name in self.variables or name in self.counters):

@@ -15,7 +15,6 @@ from .domain import (
     AgentModel,
     Assign,
     Domain,
-    DomainMetric,
     Effect,
     ForEach,
     Method,
@@ -417,8 +416,7 @@ class _Grounder:
         the rest when first asked for (§1; an estimate is always ground whole, so that
         "a task it does not know" means one it cannot reach, §4). In the human's
         ``estimate`` of the robot model a task it does not know has no way to be done (the
-        human cannot expect it). ``who`` (``"robot"``, ``"human"``; ``""`` for the estimate)
-        says which agent's actions the domain's metrics count (C11)."""
+        human cannot expect it). ``who``: the agent whose metrics count (C11; "" for none)."""
         g = GModel(model.agent)
         mg = _ModelGrounding(self, model, g, estimate, who)
         for ag in agendas:
@@ -566,13 +564,7 @@ class _ModelGrounding:
 
     def __init__(self, gr: _Grounder, model: AgentModel, g: GModel, estimate: bool,
                  who: str = "") -> None:
-        self.gr, self.model, self.g, self.estimate = gr, model, g, estimate
-        # C11: per operator name, the domain's metrics that count this agent's actions of it
-        self.counted: dict[str, list[DomainMetric]] = {}
-        for dm in gr.d.metrics.values():
-            if who and who in dm.agents():
-                for name in dm.actions:
-                    self.counted.setdefault(name, []).append(dm)
+        self.gr, self.model, self.g, self.estimate, self.who = gr, model, g, estimate, who
         self.calls: dict[int, tuple[str, tuple[str, ...]]] = {}
         self.todo: list[int] = []
         self.seen: set[int] = set()
@@ -663,19 +655,6 @@ class _ModelGrounding:
 
         yield from go(0)
 
-    def metric_tests(self, name: str, b: Mapping[Var, str]
-                     ) -> tuple[tuple[str, StateFn], ...]:
-        """C11: the domain's metrics that count this agent's action ``name`` with the
-        binding ``b``, each with its condition grounded and compiled once (a bitset test, as
-        a precondition is); a condition false whatever the state (static facts fold it)
-        leaves the metric out."""
-        out: list[tuple[str, StateFn]] = []
-        for dm in self.counted.get(name, ()):
-            f = self.gr.ground_f(dm.when, b)
-            if f != FALSE:
-                out.append((dm.name, self.gr.compile(f)))
-        return tuple(out)
-
     def one(self, t: int) -> None:
         """Ground task ``t``, mentioning the subtasks its methods reach."""
         gr, g, model = self.gr, self.g, self.model
@@ -689,10 +668,12 @@ class _ModelGrounding:
             add, dele, cond = gr.effects(op.effects, b, TRUE)
             cost = gr.p.costs.actions.get(name, _exact(op.cost))
             done_f = gr.ground_f(op.done, b) if op.done is not None else None
+            # C11: the metrics counting it, each condition compiled once (false: left out)
+            counts = [(m.name, gr.ground_f(m.when, b)) for m in gr.d.metrics_of(self.who, name)]
             dict.__setitem__(g.ops, t, GOp(
                 t, gr.task_names[t], name, args, pre_f, gr.compile(pre_f), add, dele,
                 tuple(cond), cost, done_f, gr.compile(done_f) if done_f is not None else None,
-                self.metric_tests(name, b)))
+                tuple((n, gr.compile(f)) for n, f in counts if f != FALSE)))
             return
         task = model.tasks.get(name)
         if task is None and self.estimate:
