@@ -80,6 +80,9 @@ EXAMPLES: tuple[Example, ...] = (
     Example("communication/late-fatal", 8, 1, 3, 1),
     Example("communication/other-room", 3, 1, 1, 1),
     Example("communication/starts-on-false-belief", 6, 1, 3, 1),
+    # preferences (C11): the worst case of the profile's policy; tests/test_domain_metrics.py
+    Example("concurrent/stack-prefs", 8, 0, 14, 1),
+    Example("concurrent/stack-prefs10", 20, 0, 1440, 1),
     Example("concurrent/stack10", 20, 0, 960, 1),  # joint steps: docs/domains/stacking.md
     Example("concurrent/stack4", 8, 0, 18, 1),  # tests/test_stacking.py derives it
     # Cooking: 2h + 9 with h = 5, 6, 7 human actions (tests/test_cooking.py derives it)

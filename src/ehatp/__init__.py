@@ -30,6 +30,7 @@ from .model.domain import (
     INFERABLE,
     AgentModel,
     Domain,
+    DomainMetric,
     assign,
     domain_factory,
     for_each,
@@ -40,8 +41,10 @@ from .model.formula import FALSE, TRUE, Var, eq, exists, forall
 from .model.options import (
     Communication,
     Commute,
+    Estimate,
     HumanModel,
     InformWhere,
+    Metric,
     Objective,
     ObjectiveKind,
     Passes,
@@ -125,6 +128,7 @@ def __getattr__(name: str) -> object:
 __all__ = [
     "Communication", "HumanModel", "InformWhere", "Objective", "ObjectiveKind", "Passes",
     "Relevance", "Speech", "Steps", "StepMode", "StepFirst", "Witness", "Commute",
+    "Estimate", "Metric", "DomainMetric",
     "FALSE", "HIDDEN", "INFERABLE", "TRUE", "AgentModel", "BeliefWorld", "Costs", "Domain",
     "DomainError", "EhatpError", "ExecutionError", "Executor", "InputError", "Limits",
     "Policy", "PolicyMismatch", "Problem", "Result", "UncoveredHumanAction", "Var", "eq", "exists",

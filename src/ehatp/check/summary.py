@@ -9,8 +9,10 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import Any
 
+from ..formats.policy import PolicyMove
 from ..model.options import Metric, ObjectiveKind
 from ..model.vocabulary import ROBOT
+from .metrics import MetricReader
 from .replay import Replay
 from .rules import ACTION, ANNOUNCE, ASK, INFORM, _num, _same
 
@@ -93,6 +95,14 @@ def check_objective(rp: Replay) -> None:
         elif got.get("metrics") != [str(m) for m in want.profiles[profile]]:
             rp.fail([], f"policy profile {profile!r} orders {got.get('metrics')}, the "
                       f"problem's orders {[str(m) for m in want.profiles[profile]]} (C11)")
+        else:  # the domain's metrics it names, as the domain declares them
+            declared = rp.problem.domain.metrics
+            mine = {m: declared[m].declaration() for m in want.profiles[profile]
+                    if m in declared}
+            if got.get("domain_metrics", {}) != mine:
+                rp.fail([], f"policy objective domain_metrics is "
+                          f"{got.get('domain_metrics', {})}, but the domain declares {mine} "
+                          "(C11)")
         if got.get("estimate") != str(want.estimate):
             rp.fail([], f"policy estimate is {got.get('estimate')!r}, the problem's is "
                       f"{str(want.estimate)!r} (C11)")
@@ -158,25 +168,44 @@ def check_preferences(rp: Replay, order: list[int]) -> None:
     human acts in the step (its own move an action: the reply itself with the robot first,
     the move into the reply node with the human first) or later; ``human_effort`` counts the
     human's actions, ``effort`` every action, ``communications`` inform, ask and announce
-    moves and moves said with an inform."""
+    moves and moves said with an inform. A metric the domain declares
+    (:class:`~.metrics.MetricReader`, read from its declaration) adds 1 at a step's end when
+    an action of the step (the ending move's, or the move into the reply node) is one it
+    counts, its condition read in the step's start state (the reply node's recorded
+    state)."""
     pol, problem = rp.policy, rp.problem
     obj = pol.objective
     names = obj.get("metrics")
     vectors = obj.get("vectors")
+    declared = problem.domain.metrics
     if not isinstance(names, list) or not isinstance(vectors, list) \
-            or len(vectors) != len(pol.nodes) or any(m not in list(Metric) for m in names):
-        rp.fail([], "a preferences policy records objective.metrics and one vector per node "
-                "(objective.vectors) (C11)")
+            or len(vectors) != len(pol.nodes) \
+            or any(not isinstance(m, str) or m not in list(Metric) and m not in declared
+                   for m in names):
+        rp.fail([], "a preferences policy records objective.metrics (built in or the "
+                "domain's) and one vector per node (objective.vectors) (C11)")
         return
-    metrics = [Metric(m) for m in names]
+    metrics = [Metric(m) if m in list(Metric) else str(m) for m in names]
+    reader = MetricReader(problem, rp.sem.grounded)
     optimistic = obj.get("estimate") == "optimistic"
     human = pol.agents.get("human")
     step = problem.steps.cost
     acting: set[int] = set()  # reply nodes whose step's human move is an action
+    opened: dict[int, PolicyMove] = {}  # reply node -> the move that started its step
     for node in pol.nodes:
         for move in node.moves:
             if move.step == "human" and move.agent == human and move.kind == ACTION:
                 acting.add(move.to)
+            if move.step in ("human", "robot") and 0 <= move.to < len(pol.nodes):
+                opened[move.to] = move
+
+    def counted(n: int, move: PolicyMove, metric: str) -> bool:
+        """Whether the step ``move`` ends at node ``n`` has an action ``metric`` counts."""
+        state = frozenset(pol.nodes[n].state)
+        first = opened.get(n) if move.step == "reply" else None
+        return any(m.kind == ACTION and reader.counts(
+            declared[metric], "human" if m.agent == human else "robot", m.name, m.args, state)
+            for m in (move, first) if m is not None)
     vec: dict[int, tuple[Fraction, ...]] = {}
     for n in order:
         node = pol.nodes[n]
@@ -202,8 +231,10 @@ def check_preferences(rp: Replay, order: list[int]) -> None:
                     out.append(x + 1 if is_human and acts else x)
                 elif m == Metric.EFFORT:
                     out.append(x + 1 if acts else x)
-                else:
+                elif m == Metric.COMMUNICATIONS:
                     out.append(x + 1 if move.kind in COMMUNICATIONS or move.told else x)
+                else:  # the domain's
+                    out.append(x + 1 if ends and counted(n, move, m) else x)
             options.append(tuple(out))
         vec[n] = min(options) if optimistic else max(options)
     path_to = paths(rp)

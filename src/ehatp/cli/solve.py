@@ -135,7 +135,8 @@ def solve_cmd(
 
     Prints a summary: solved or why not, states generated/distinct, the largest number of
     worlds the human entertains (|W|), leaves, the policy's worst-case and expected cost (and
-    which one was minimised), communications and time.
+    which one was minimised), communications, under preferences the chosen profile's vector
+    (C11), and time.
     Exit 0 solved; 1 no policy exists or a limit stopped the work (one line says which; the
     best policy found so far, if any, is still written, marked not optimal); 2 bad input.
     """
@@ -233,6 +234,12 @@ def _summary(prob: Problem, result: Result, wall_ms: float, written: Path | None
 
         rows += [("leaves", pol.leaves), *cost_lines(pol),
                  ("communications", pol.communications)]
+        obj = pol.objective
+        if obj.get("kind") == "preferences":  # C11: the chosen profile's root vector
+            rows.append(("profile", f"{obj.get('profile')} ({obj.get('estimate')}): "
+                         + ", ".join(f"{m} {v}" for m, v in zip(obj.get("metrics", []),
+                                                                obj.get("value", []),
+                                                                strict=False))))
     rows.append(("time", f"{st.get('time_ms', 0):,} ms search, {wall_ms:,.1f} ms in all"))
     if written is not None:
         solved = result.status == SolveStatus.SOLVED

@@ -22,6 +22,11 @@ next is in a hand already (looking one cube ahead is what lets the two work in p
 Holding a cube whose turn has not come, an agent is blocked and waits. The rule keeps every
 branch free of deadlock: of two held cubes, the lower one can always be placed.
 
+Preferences (C11): the domain declares the metric ``shared_taken``, the cubes the robot takes
+from the shared zone (the steps in which it picks a cube whose ``zone`` is ``shared``). A
+human who likes to build prefers the robot to leave the shared cubes to it: a profile
+``builder = ["shared_taken", "makespan"]`` (``examples/concurrent/stack-prefs.toml``).
+
 Static facts a problem gives: ``zone(c, z)`` for every cube, ``target(c, p)`` for every
 position, ``bottom(p)`` for the lowest position and ``below(q, p)`` for each position ``p``
 directly above ``q``.
@@ -82,6 +87,10 @@ def make_domain() -> Domain:
                  subtasks=[place(c, p), stack()])
         m.method(stack, "pick", params=[c, p], pre=handempty(who) & ontable(c) & reach
                  & target(c, p) & wanted(p), subtasks=[pick(c), stack()])
+
+    # a metric a preference profile may order (C11): what a human who likes to build minds
+    d.metric("shared_taken", agent="robot", actions=["pick"], when=zone(c, SHARED),
+             doc="the cubes the robot takes from the shared zone")
     return d
 
 

@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any
 from ..errors import HddlMissing, HddlUnsupported, control_char
 from ..model.domain import Domain
 from ..model.problem import BeliefWorld, Limits, Problem
-from .hddl_sidecar import AGENTS, Sidecar, literal, read_sidecar
+from .hddl_sidecar import AGENTS, Sidecar, check_metrics, literal, read_sidecar
 
 if TYPE_CHECKING:  # unified-planning is optional (ehatp[hddl])
     from unified_planning.model import FNode
@@ -323,6 +323,7 @@ class _Converter:
         self.module_file = module_file
         self.names = _Names()
         self.vars: dict[tuple[str, str], str] = {}  # (name, type) -> identifier
+        self.action_env: dict[str, dict[str, str]] = {}  # action -> its parameters' idents
         self.lines: list[str] = []
         self.notes: list[str] = []
 
@@ -483,6 +484,9 @@ class _Converter:
             L += ["", "    # the human expects nothing of the robot (the sidecar): it sees what "
                   "the robot does,", "    # and follows no plan of it",
                   "    d.robot_seen_by_human = AgentModel(d.robot_name)"]
+        if side.metrics:
+            L += ["", "    # metrics a preference profile may name (the sidecar)"]
+            self.metrics()
         goal = self.goal()
         if side.customize is not None:
             L += ["", "    # the Python sidecar's customize(d)",
@@ -645,10 +649,25 @@ class _Converter:
         args.append(f"effects=[{', '.join(effs)}]")
         if cost != 1:
             args.append(f"cost={cost}")
+        self.action_env[a.name] = env
         held = self.side.resources.get(a.name)
         if held:
             args.append(f"resources=[{', '.join(self.resource(a.name, x, env) for x in held)}]")
         self.lines.append(self.wrap(f"    {self.names.get('task', a.name)} = m.action(", args))
+
+    def metrics(self) -> None:
+        """The sidecar's ``[metrics]`` (checked: :func:`~.hddl_sidecar.check_metrics`) as
+        ``d.metric(...)`` lines (docs/concurrent.md C11)."""
+        check_metrics(self.side, self.agent, self.action_env)
+        for name, m in sorted(self.side.metrics.items()):
+            args = [_q(name), f"agent={_q(m.agent)}",
+                    f"actions=[{', '.join(_q(a) for a in m.actions)}]"]
+            if m.when:  # over the parameters the actions share (check_metrics)
+                env = self.action_env[m.actions[0]]
+                args.append(f"when={self.lits(m.when, env, f'[metrics.{name}]')}")
+            if m.doc:
+                args.append(f"doc={_q(m.doc)}")
+            self.lines.append(self.wrap("    d.metric(", args))
 
     def resource(self, action: str, x: str, env: dict[str, str]) -> str:
         """A ``[resources]`` entry of the sidecar as the DSL writes it: ``?x`` the action's

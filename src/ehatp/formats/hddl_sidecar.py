@@ -24,6 +24,20 @@ CLASSES = ("observable", "inferable", "hidden")
 
 
 @dataclass
+class SidecarMetric:
+    """A ``[metrics.NAME]`` table: the steps in which ``agent`` does one of ``actions`` while
+    the literals ``when`` hold at the step's start (docs/hddl.md, docs/concurrent.md C11)."""
+
+    agent: str
+    actions: list[str]
+    when: list[str] = field(default_factory=list)
+    doc: str = ""
+
+
+METRIC_AGENTS = ("robot", "human", "either")
+
+
+@dataclass
 class Sidecar:
     """What HDDL does not say (docs/hddl.md, "The sidecar"). Literals are written
     ``"at(?x, depot)"`` or ``"not busy"``: ``?name`` is a parameter of the predicate being
@@ -44,6 +58,10 @@ class Sidecar:
     # action -> what it holds while it runs ("?x": its parameter x, else a name): joint steps
     # never do two actions holding a common one together (docs/concurrent.md, C3 c)
     resources: dict[str, list[str]] = field(default_factory=dict)
+    # metric name -> its declaration (docs/concurrent.md C11, "Metrics a domain declares"):
+    # agent ("robot" | "human" | "either"), actions (names), when (literals over the actions'
+    # parameters, "?x"; all must hold), doc
+    metrics: dict[str, SidecarMetric] = field(default_factory=dict)
     problem: dict[str, Any] = field(default_factory=dict)  # [problem] K, starts, name
     limits: dict[str, Any] = field(default_factory=dict)  # [limits] of the problem
     customize: Path | None = None  # a Python sidecar with customize(d), run last
@@ -64,6 +82,16 @@ class Sidecar:
         if self.expects not in ("plan", "nothing"):
             raise HddlUnsupported(f"{where}: [other] expects = {self.expects!r}; use \"plan\" "
                                   "or \"nothing\"")
+        for name, m in self.metrics.items():
+            if not re.fullmatch(r"[a-z][a-z0-9_]*", name):
+                raise HddlUnsupported(f"{where}: [metrics.{name}]: a metric's name is lower "
+                                      "case letters, digits and _, starting with a letter")
+            if m.agent not in METRIC_AGENTS:
+                raise HddlUnsupported(f"{where}: [metrics.{name}] agent = {m.agent!r}; use "
+                                      + ", ".join(f'"{a}"' for a in METRIC_AGENTS))
+            if not m.actions:
+                raise HddlUnsupported(f"{where}: [metrics.{name}] actions is empty; name the "
+                                      "actions it counts")
         if self.other_agenda and self.other == "none" and self.customize is None:
             raise HddlUnsupported(f"{where}: [other] agenda needs model = \"same\" (or a "
                                   "Python sidecar whose customize(d) gives the other agent "
@@ -76,6 +104,7 @@ _SIDECAR_KEYS = {
     "copresence": {"when"},
     "other": {"model", "agenda", "expects"},
     "resources": set(),  # any action name
+    "metrics": set(),  # any metric name, each a table of _METRIC_KEYS
     "problem": {"name", "K", "starts", "description"},
     "limits": {"timeout", "max_states", "max_depth", "max_memory", "max_decomposition",
                "symmetry"},
@@ -162,8 +191,8 @@ def _sidecar_from(data: Mapping[str, Any], where: str, check: bool = True) -> Si
         if keys is None:
             raise HddlUnsupported(f"{where}: unknown table [{table}]; use "
                                   f"{', '.join(f'[{t}]' for t in _SIDECAR_KEYS)}")
-        bad = (sorted(set(value) - keys) if table not in ("observability", "resources")
-               else [])
+        bad = (sorted(set(value) - keys)
+               if table not in ("observability", "resources", "metrics") else [])
         if bad:
             raise HddlUnsupported(f"{where}: [{table}] has no key {bad[0]!r}; use "
                                   f"{', '.join(sorted(keys))}")
@@ -185,11 +214,41 @@ def _sidecar_from(data: Mapping[str, Any], where: str, check: bool = True) -> Si
     s.expects = str(other.get("expects", "plan"))
     s.resources = {str(a): [str(x) for x in held]
                    for a, held in data.get("resources", {}).items()}
+    s.metrics = {str(name): SidecarMetric(str(m.get("agent", "")),
+                                          [str(a) for a in m.get("actions", [])],
+                                          [str(x) for x in m.get("when", [])],
+                                          str(m.get("doc", "")))
+                 for name, m in data.get("metrics", {}).items()}
     s.problem = dict(data.get("problem", {}))
     s.limits = dict(data.get("limits", {}))
     if check:
         s.check()
     return s
+
+
+def check_metrics(side: Sidecar, agent: str, params: Mapping[str, Mapping[str, str]]) -> None:
+    """Raise :class:`HddlUnsupported`, naming the sidecar, unless every ``[metrics.NAME]``
+    names actions of the domain (``params``: each action's parameters, by name, as the
+    written module names them), counts an agent that has a model (``agent`` has the HDDL
+    one; the other needs ``[other] model = "same"`` or a Python sidecar), and reads in
+    ``when`` only parameters every one of its actions has (docs/concurrent.md C11)."""
+    for name, m in sorted(side.metrics.items()):
+        where = f"{side.source}: [metrics.{name}]"
+        unknown = [a for a in m.actions if a not in params]
+        if unknown:
+            raise HddlUnsupported(f"{where} names {unknown[0]!r}, which is not an action of "
+                                  "the domain")
+        if m.agent not in (agent, "either") and side.other != "same" and side.customize is None:
+            raise HddlUnsupported(f"{where}: agent = {m.agent!r}, but only the {agent} has the "
+                                  f'HDDL model; add [other] model = "same", or count the '
+                                  f"{agent}'s actions")
+        for text in m.when:
+            for x in literal(text, where)[2]:
+                if x.startswith("?") and any(params[a].get(x[1:]) != params[m.actions[0]]
+                                             .get(x[1:]) for a in m.actions):
+                    raise HddlUnsupported(f"{where}: when reads {x}, which is not a parameter "
+                                          "(of one type) of every action it counts "
+                                          f"({', '.join(m.actions)})")
 
 
 _LIT = re.compile(r"^\s*(not\s+)?([A-Za-z_][\w\-]*)\s*(?:\((.*)\))?\s*$")
@@ -209,4 +268,5 @@ def literal(text: str, where: str) -> tuple[bool, str, list[str]]:
     return m.group(1) is None, m.group(2), args
 
 
-__all__ = ["AGENTS", "CLASSES", "SCHEMA", "Sidecar", "check_schema", "literal", "read_sidecar"]
+__all__ = ["AGENTS", "CLASSES", "METRIC_AGENTS", "SCHEMA", "Sidecar", "SidecarMetric",
+           "check_metrics", "check_schema", "literal", "read_sidecar"]

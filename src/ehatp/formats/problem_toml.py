@@ -252,7 +252,7 @@ def loads(text: str, path: str | Path, overrides: Mapping[str, Any] | None = Non
     beliefs = _beliefs(r, data.get("beliefs"), atom, init, domain, seen)
     goal = _goal(r, data, atom)
     costs, limits = _costs(r, data, domain), _limits(r, data)
-    human, communication, objective, notes = read_options(r, data)
+    human, communication, objective, notes = read_options(r, data, domain.metrics)
     steps = read_steps(r, data)
     after = tuple(r.strings("[problem] after", prob.get("after", [])))
     return Problem(name=name, domain=domain, objects=objects, init=init,

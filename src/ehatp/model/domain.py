@@ -18,6 +18,7 @@ analyse it: which atoms a precondition reads, what the human can see, how to pri
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal, TypeVar
@@ -41,6 +42,7 @@ from .formula import (
     free_vars,
     term_str,
 )
+from .options import Metric
 
 AGENT_TYPE = "agent"
 
@@ -644,6 +646,44 @@ def _effect_vars(where: str, effects: Iterable[object]) -> set[Var]:
     return out
 
 
+# --- metrics a preference profile may order (docs/concurrent.md, C11) ------------------------
+
+MetricAgent = Literal["robot", "human", "either"]
+METRIC_AGENTS: tuple[MetricAgent, ...] = ("robot", "human", "either")
+_METRIC_NAME = re.compile(r"[a-z][a-z0-9_]*")
+
+
+@dataclass(frozen=True, eq=False)
+class DomainMetric:
+    """A per-branch metric the domain declares (docs/concurrent.md C11, "Metrics a domain
+    declares"): along a branch, the number of **steps** in which ``agent`` (``"robot"``,
+    ``"human"``, or ``"either"`` of them: a step counts once even when both do) does an
+    action of one of the operators ``actions`` while ``when`` holds. ``when`` is a formula
+    over the operator's parameters (and constants, quantifiers), read in the true state at
+    the step's start, before either action; ``TRUE`` counts every such action.
+
+    A step adds 1 or 0 whatever comes after it, so the metric grows along a branch as the
+    built-in ones do and a preference profile may order it with them
+    (``[objective.profiles]``)."""
+
+    name: str
+    agent: MetricAgent
+    actions: tuple[str, ...]
+    when: Formula = TRUE
+    doc: str = ""
+
+    def agents(self) -> tuple[str, ...]:
+        """The agents whose actions count: ``("robot",)``, ``("human",)`` or both."""
+        return ("robot", "human") if self.agent == "either" else (self.agent,)
+
+    def declaration(self) -> dict[str, object]:
+        """The declaration as a policy file records it (docs/policy-format.md): ``agent``,
+        ``actions``, ``when`` (the formula as printed, ``?c`` a parameter; ``"true"``) and
+        ``doc``."""
+        return {"agent": self.agent, "actions": list(self.actions), "when": str(self.when),
+                "doc": self.doc}
+
+
 # --- the domain ------------------------------------------------------------------------------
 
 
@@ -667,6 +707,8 @@ class Domain:
         self._robot_seen_by_human: AgentModel | None = None
         self.copresence: Formula = TRUE
         self.goal: Formula | None = None
+        # metrics a preference profile may order beside the built-in ones (C11)
+        self.metrics: dict[str, DomainMetric] = {}
 
     @property
     def robot_seen_by_human(self) -> AgentModel:
@@ -777,6 +819,62 @@ class Domain:
         self.derived_predicates[name] = d
         return d
 
+    def metric(self, name: str, *, agent: MetricAgent, actions: Iterable[str | Operator],
+               when: Formula = TRUE, doc: str = "") -> DomainMetric:
+        """Declare a metric a preference profile may name (docs/concurrent.md C11, "Metrics
+        a domain declares"): the steps in which ``agent`` (``"robot"``, ``"human"`` or
+        ``"either"``) does an action of one of ``actions`` (operator names, or the operators
+        themselves, declared before) while ``when`` holds in the state at the step's start.
+        ``when`` may use the parameters every one of those operators has (the same ``Var``)::
+
+            d.metric("shared_taken", agent="robot", actions=[pick], when=zone(c, "shared"),
+                     doc="cubes the robot takes from the shared zone")
+
+        The name is its one meaning: lower case letters, digits and ``_``, not a built-in
+        metric's (``makespan``, ``human_end``, ``human_effort``, ``effort``,
+        ``communications``), declared once."""
+        where = f"metric {name!r}"
+        if not isinstance(name, str) or not _METRIC_NAME.fullmatch(name):
+            raise DomainError(f"{where}: a metric's name is lower case letters, digits and _, "
+                              "starting with a letter")
+        if name in {m.value for m in Metric}:
+            raise DomainError(f"{where}: {name} is a built-in metric; give yours another name")
+        if name in self.metrics:
+            raise DomainError(f"{where} is declared twice")
+        if agent not in METRIC_AGENTS:
+            raise DomainError(f"{where}: agent {agent!r}; use one of "
+                              + ", ".join(repr(a) for a in METRIC_AGENTS))
+        if not isinstance(when, Formula):
+            raise DomainError(f"{where}: when is {when!r}, not a formula")
+        if not isinstance(doc, str):
+            raise DomainError(f"{where}: doc is {doc!r}, not a string")
+        names: list[str] = []
+        for a in actions:
+            n = a.name if isinstance(a, Operator) else a
+            if not isinstance(n, str):
+                raise DomainError(f"{where}: {a!r} is neither an operator nor its name")
+            if n not in names:
+                names.append(n)
+        if not names:
+            raise DomainError(f"{where}: name at least one action it counts")
+        m = DomainMetric(name, agent, tuple(names), when, doc)
+        models = [self.robot if who == "robot" else self.human for who in m.agents()]
+        for n in names:
+            ops = [model.operators[n] for model in models if n in model.operators]
+            if not ops:
+                raise DomainError(f"{where}: {n!r} is not an action of "
+                                  f"{' or '.join(model.agent for model in models)}; declare "
+                                  "the action first")
+            for op in ops:
+                _check_scope(f"{where} on {op.name}", set(op.params), [when])
+        self.metrics[name] = m
+        return m
+
+    def metrics_of(self, agent: str, action: str) -> list[DomainMetric]:
+        """C11: the declared metrics that count ``agent``'s (``"robot"`` or ``"human"``)
+        actions of the operator ``action``."""
+        return [m for m in self.metrics.values() if agent in m.agents() and action in m.actions]
+
     def _fresh_pred(self, name: str) -> None:
         if (name in self.predicates or name in self.derived_predicates
                 or name in self.variables or name in self.counters):
@@ -832,6 +930,8 @@ class Domain:
                                                   *self.counters.values()]
         for sv in valued:
             yield from of(f"visibility of {sv.name}", sv.observability.when)
+        for dm in self.metrics.values():
+            yield from of(f"metric {dm.name}", dm.when)
         for m in (self.robot, self.human, self.robot_seen_by_human):
             for op in m.operators.values():
                 where = f"{m.agent}: action {op.name}"

@@ -32,6 +32,10 @@ class GOp:
     cost: Cost
     done_f: Formula | None
     done: StateFn | None
+    # the domain's metrics this action counts towards, each with its condition compiled
+    # (docs/concurrent.md C11): (metric name, test of the state at the step's start);
+    # empty in the human's estimate of the robot's model
+    metrics: tuple[tuple[str, StateFn], ...] = ()
 
     def apply(self, s: int) -> int:
         add, dele = self.add, self.dele

@@ -248,8 +248,8 @@ class _Grounder:
         attributes there). The robot's model reaches the belief worlds' agendas too when the
         human's view of it is the robot's own."""
         d = self.d
-        robot = self.ground_model(d.robot, [r_ag])
-        human = self.ground_model(d.human, [h_ag])
+        robot = self.ground_model(d.robot, [r_ag], who="robot")
+        human = self.ground_model(d.human, [h_ag], who="human")
         beliefs = []
         belief_agendas = [r_ag]
         for w in self.p.beliefs:
@@ -263,7 +263,7 @@ class _Grounder:
         rh = (robot if d.robot_seen_by_human is d.robot
               else self.ground_model(d.robot_seen_by_human, belief_agendas, estimate=True))
         if rh is robot and any(ag != r_ag for ag in belief_agendas):
-            robot = rh = self.ground_model(d.robot, belief_agendas)
+            robot = rh = self.ground_model(d.robot, belief_agendas, who="robot")
         return robot, human, rh, beliefs
 
     def _goal(self) -> Formula:
@@ -411,14 +411,14 @@ class _Grounder:
         return tuple(self.task_id(call_str(n, a)) for n, a in calls)
 
     def ground_model(self, model: AgentModel, agendas: Sequence[tuple[int, ...]],
-                     estimate: bool = False) -> GModel:
+                     estimate: bool = False, who: str = "") -> GModel:
         """Ground the tasks reachable from ``agendas``: ``[limits] ground_ahead`` of them ahead,
         the rest when first asked for (§1; an estimate is always ground whole, so that
         "a task it does not know" means one it cannot reach, §4). In the human's
         ``estimate`` of the robot model a task it does not know has no way to be done (the
-        human cannot expect it)."""
+        human cannot expect it). ``who``: the agent whose metrics count (C11; "" for none)."""
         g = GModel(model.agent)
-        mg = _ModelGrounding(self, model, g, estimate)
+        mg = _ModelGrounding(self, model, g, estimate, who)
         for ag in agendas:
             for t in ag:
                 mg.mention(t)
@@ -562,8 +562,9 @@ class _ModelGrounding:
     done-condition; an abstract task's done-condition and its methods, one per binding of
     their own parameters whose precondition is not false before any action."""
 
-    def __init__(self, gr: _Grounder, model: AgentModel, g: GModel, estimate: bool) -> None:
-        self.gr, self.model, self.g, self.estimate = gr, model, g, estimate
+    def __init__(self, gr: _Grounder, model: AgentModel, g: GModel, estimate: bool,
+                 who: str = "") -> None:
+        self.gr, self.model, self.g, self.estimate, self.who = gr, model, g, estimate, who
         self.calls: dict[int, tuple[str, tuple[str, ...]]] = {}
         self.todo: list[int] = []
         self.seen: set[int] = set()
@@ -667,9 +668,12 @@ class _ModelGrounding:
             add, dele, cond = gr.effects(op.effects, b, TRUE)
             cost = gr.p.costs.actions.get(name, _exact(op.cost))
             done_f = gr.ground_f(op.done, b) if op.done is not None else None
+            # C11: the metrics counting it, each condition compiled once (false: left out)
+            counts = [(m.name, gr.ground_f(m.when, b)) for m in gr.d.metrics_of(self.who, name)]
             dict.__setitem__(g.ops, t, GOp(
                 t, gr.task_names[t], name, args, pre_f, gr.compile(pre_f), add, dele,
-                tuple(cond), cost, done_f, gr.compile(done_f) if done_f is not None else None))
+                tuple(cond), cost, done_f, gr.compile(done_f) if done_f is not None else None,
+                tuple((n, gr.compile(f)) for n, f in counts if f != FALSE)))
             return
         task = model.tasks.get(name)
         if task is None and self.estimate:

@@ -89,8 +89,9 @@ class ObjectiveKind(StrEnum):
 
 
 class Metric(StrEnum):
-    """A per-branch metric a preference profile orders (C11, docs/concurrent.md
-    "Preferences")."""
+    """A built-in per-branch metric a preference profile orders (C11, docs/concurrent.md
+    "Preferences"); a profile may also name the metrics its domain declares
+    (:meth:`~ehatp.model.domain.Domain.metric`)."""
 
     MAKESPAN = "makespan"  # the steps' cost ([steps] cost each)
     HUMAN_END = "human_end"  # steps until the human's last action ([steps] cost each)
@@ -186,13 +187,15 @@ class Objective:
     ties: tuple[TieKey, ...] = DEFAULT_TIES
     # kind = "preferences" (C11): the chosen profile, every named profile, the aggregation
     profile: str = ""
-    profiles: Mapping[str, tuple[Metric, ...]] = field(default_factory=dict)
+    # each profile's metrics, most important first: a built-in :class:`Metric` or the name of
+    # a metric the domain declares (C11)
+    profiles: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     estimate: Estimate = Estimate.WORST_CASE
 
     @property
-    def metrics(self) -> tuple[Metric, ...]:
+    def metrics(self) -> tuple[str, ...]:
         """C11: the chosen profile's metrics, most important first (empty unless
-        ``kind = "preferences"``)."""
+        ``kind = "preferences"``): built-in ones as :class:`Metric`, the domain's by name."""
         return tuple(self.profiles.get(self.profile, ()))
 
     def with_profile(self, name: str) -> Objective:
@@ -244,10 +247,29 @@ def _count(r: _Reader, place: str, key: str, v: Any) -> int:
     return v
 
 
-def read_options(r: _Reader, data: Mapping[str, Any]
+def metric(name: str) -> str:
+    """C11: a profile's metric name as the objective keeps it: a built-in :class:`Metric`, or
+    the name of one the domain declares."""
+    return Metric(name) if name in _BUILT_IN else name
+
+
+_BUILT_IN = frozenset(m.value for m in Metric)
+
+
+def known_metrics(domain_metrics: Iterable[str]) -> str:
+    """C11: the metrics a profile may name, for a message: the built-in ones, then the
+    domain's (``"makespan", ... (built in); "shared_taken" (the domain's)``)."""
+    own = sorted(domain_metrics)
+    return (", ".join(f'"{m.value}"' for m in Metric) + " (built in)"
+            + ("; " + ", ".join(f'"{m}"' for m in own) + " (the domain's)" if own
+               else "; the domain declares none"))
+
+
+def read_options(r: _Reader, data: Mapping[str, Any], domain_metrics: Iterable[str] = ()
                  ) -> tuple[HumanModel, Communication, Objective, tuple[str, ...]]:
     """The ``[human]``, ``[communication]`` and ``[objective]`` tables (and the deprecated
-    ``[options]`` spellings, with a one-line note each)."""
+    ``[options]`` spellings, with a one-line note each); a preference profile may name the
+    built-in metrics and ``domain_metrics`` (C11)."""
     notes: list[str] = []
     old = r.table(data, "options", OPTION_KEYS["options"])
     h = r.table(data, "human", OPTION_KEYS["human"])
@@ -296,15 +318,16 @@ def read_options(r: _Reader, data: Mapping[str, Any]
                     "ties")
     kind = _choice(r, "objective", o, "kind", ObjectiveKind, ObjectiveKind.WORST_CASE)
     objective = Objective(kind, weights, tuple(TieKey(t) for t in ties),
-                          *_read_profiles(r, data, o, kind))
+                          *_read_profiles(r, data, o, kind, frozenset(domain_metrics)))
     return human, comm, objective, tuple(notes)
 
 
 def _read_profiles(r: _Reader, data: Mapping[str, Any], o: Mapping[str, Any],
-                   kind: ObjectiveKind
-                   ) -> tuple[str, dict[str, tuple[Metric, ...]], Estimate]:
+                   kind: ObjectiveKind, domain_metrics: frozenset[str]
+                   ) -> tuple[str, dict[str, tuple[str, ...]], Estimate]:
     """C11: ``[objective] profile``, ``estimate`` and ``[objective.profiles]`` (each a list of
-    distinct metric names); only with ``kind = "preferences"``, which needs joint steps."""
+    distinct metric names: built in, or ``domain_metrics``); only with ``kind =
+    "preferences"``, which needs joint steps."""
     if kind != ObjectiveKind.PREFERENCES:
         for key in ("profile", "profiles", "estimate"):
             if key in o:
@@ -321,8 +344,7 @@ def _read_profiles(r: _Reader, data: Mapping[str, Any], o: Mapping[str, Any],
         raise r.err("[objective] profiles", "no profiles given",
                     'write [objective.profiles] with e.g. hurry = ["makespan", '
                     '"communications"]', "profiles")
-    names = [m.value for m in Metric]
-    profiles: dict[str, tuple[Metric, ...]] = {}
+    profiles: dict[str, tuple[str, ...]] = {}
     for name, ms in table.items():
         if (not isinstance(ms, list) or not ms or not all(isinstance(m, str) for m in ms)
                 or len(set(ms)) != len(ms)):
@@ -330,11 +352,10 @@ def _read_profiles(r: _Reader, data: Mapping[str, Any], o: Mapping[str, Any],
                         f"names, got {ms!r}", 'write e.g. ["makespan", "communications"]',
                         name)
         for m in ms:
-            if m not in names:
-                raise r.err(f"[objective.profiles] {name}", f"unknown metric {m!r} (metrics "
-                            "a domain declares are not built)",
-                            "use " + ", ".join(f'"{x}"' for x in names), m)
-        profiles[name] = tuple(Metric(m) for m in ms)
+            if m not in _BUILT_IN and m not in domain_metrics:
+                raise r.err(f"[objective.profiles] {name}", f"unknown metric {m!r}",
+                            "use one of " + known_metrics(domain_metrics), m)
+        profiles[name] = tuple(metric(m) for m in ms)
     profile = o.get("profile")
     if not isinstance(profile, str) or profile not in profiles:
         raise r.err("[objective] profile", f"expected one of the profiles' names, got "
@@ -377,4 +398,4 @@ def read_steps(r: _Reader, data: Mapping[str, Any]) -> Steps:
 __all__ = ["DEFAULT_TIES", "OPTION_KEYS", "TIE_KEYS", "Commute", "Communication", "Estimate",
            "HumanModel", "InformWhere", "Intentions", "Metric", "Objective", "ObjectiveKind",
            "Passes", "Relevance", "Speech", "StepFirst", "StepMode", "Steps", "TieKey",
-           "Witness", "read_options", "read_steps"]
+           "Witness", "known_metrics", "metric", "read_options", "read_steps"]

@@ -21,7 +21,7 @@ from .._deprecated import moved_names
 from ..errors import InputError
 from .domain import AGENT_TYPE, Domain, article, signature
 from .formula import Var
-from .options import Communication, HumanModel, Objective, Steps
+from .options import Communication, HumanModel, Metric, Objective, Steps, known_metrics
 
 Cost = int | Fraction
 GroundAtom = tuple[str, tuple[str, ...]]
@@ -417,6 +417,14 @@ def check_problem(problem: Problem) -> None:
                         f"use one of: {', '.join(sorted(all_ops))}")
         r.number(f"costs actions {a}", v)
     r.strings("after", list(problem.after))
+    for name, metrics in problem.objective.profiles.items():  # C11
+        for m in metrics:
+            if m not in _BUILT_IN_METRICS and m not in d.metrics:
+                raise r.err(f"objective profiles {name}", f"unknown metric {m!r}",
+                            "use one of " + known_metrics(d.metrics))
+
+
+_BUILT_IN_METRICS = frozenset(m.value for m in Metric)
 
 
 def _pair(r: Checker, place: str, value: Any, what: str,

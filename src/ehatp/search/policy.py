@@ -199,8 +199,12 @@ def _policy(p: Problem, problem_name: str, nodes: list[PolicyNode], optimal: boo
         "kind": obj.kind.value, "weights": {k: num(v) for k, v in sorted(obj.weights.items())},
         "ties": [str(t) for t in obj.ties]}
     if obj.kind == ObjectiveKind.PREFERENCES:  # C11: the profile; the vectors: see extract
-        objective.update(profile=obj.profile, metrics=[str(m) for m in obj.metrics],
-                         estimate=str(obj.estimate))
+        objective.update(profile=obj.profile, metrics=[str(m) for m in obj.metrics])
+        declared = {m: p.domain.metrics[m].declaration() for m in obj.metrics
+                    if m in p.domain.metrics}
+        if declared:  # what the domain's metrics the profile names count
+            objective["domain_metrics"] = declared
+        objective["estimate"] = str(obj.estimate)
     policy = Policy(problem_name, p.domain.name, {"robot": p.domain.robot_name,
                                                   "human": p.domain.human_name}, p.K,
                     costs, nodes, own[0], 0, 0, optimal, stats, list(p.after), objective,

@@ -35,7 +35,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from fractions import Fraction
 
-from ..epistemic.concurrent import H_ACTION
+from ..epistemic.concurrent import H_ACTION, R_ACTION
 from ..epistemic.semantics import ACTION, ANNOUNCE, ASK, INFORM, WAIT, Move
 from ..epistemic.state import HUMAN, ROBOT, EState
 from ..model.options import Estimate, Metric, Objective, ObjectiveKind, TieKey
@@ -601,7 +601,7 @@ def prefer(gr: Graph, order: list[int], allowed: Callable[[int, int], bool], obj
     return choice, vector
 
 
-def step_metrics(gr: Graph, es: EState, move: Move, metrics: tuple[Metric, ...],
+def step_metrics(gr: Graph, es: EState, move: Move, metrics: tuple[str, ...],
                  after: Vector) -> Vector:
     """C11: the profile's metrics from node ``es`` through ``move``, given ``after`` (those
     of the move's child). A move ends a step when it is the reply (the agent who does not
@@ -609,7 +609,11 @@ def step_metrics(gr: Graph, es: EState, move: Move, metrics: tuple[Metric, ...],
     ``makespan``; ``human_end`` (the steps until the human's last action) adds it when the
     human acts in that step (its move, or with the human first the move the reply node holds
     pending) or acts later; ``human_effort`` counts the human's actions (one a step),
-    ``effort`` both agents' actions, ``communications`` inform and ask moves."""
+    ``effort`` both agents' actions, ``communications`` inform and ask moves. A metric the
+    domain declares adds 1 at the move that ends a step in which an action it counts is done
+    (either agent's: the reply, or the move the reply node holds pending) and its condition,
+    compiled when the action was grounded, holds in ``es``'s true state (the step's start:
+    a reply node keeps it)."""
     sem = gr.sem
     step = sem.grounded.problem.steps
     first = ROBOT if step.first.value == "robot" else HUMAN
@@ -627,9 +631,29 @@ def step_metrics(gr: Graph, es: EState, move: Move, metrics: tuple[Metric, ...],
             out.append(x + 1 if human and acts else x)
         elif m == Metric.EFFORT:
             out.append(x + 1 if acts else x)
-        else:  # communications
+        elif m == Metric.COMMUNICATIONS:
             out.append(x + 1 if speaks(move) else x)
+        else:  # a metric the domain declares
+            out.append(x + 1 if ends and _counted(gr, es, move, m) else x)
     return tuple(out)
+
+
+def _counted(gr: Graph, es: EState, move: Move, name: str) -> bool:
+    """C11: whether the step ``move`` ends at ``es`` holds an action the domain's metric
+    ``name`` counts, its condition true in the step's start state ``es.true``: the move's own
+    action, or the first mover's, which the reply node holds pending (``(H_ACTION, op)``
+    with the human first, ``(R_ACTION, op, i)`` with the robot first)."""
+    g = gr.sem.grounded
+    ops = []
+    if move.kind == ACTION and move.op >= 0:
+        ops.append((g.robot if move.agent == ROBOT else g.human).ops[move.op])
+    pending = es.pending
+    if pending and pending[0] == H_ACTION:
+        ops.append(g.human.ops[pending[1]])
+    elif pending and pending[0] == R_ACTION:
+        ops.append(g.robot.ops[pending[1]])
+    t = es.true
+    return any(m == name and test(t) for op in ops for m, test in op.metrics)
 
 
 def weighted_mean(weights: list[Fraction], xs: list[Cost]) -> Cost:
