@@ -27,7 +27,7 @@ from ehatp import Policy
 from ehatp.cli.app import app
 from ehatp.errors import printable
 from ehatp.formats import bt, render
-from ehatp.formats.hddl import _q
+from ehatp.formats.hddl_source import _q
 from ehatp.formats.text import plain, policy_lines
 
 from .conftest import solved_v2
