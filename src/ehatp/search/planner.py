@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from ..epistemic.state import EState
 from ..errors import InputError
 from ..formats.policy import Policy
 from ..model.grounded import Grounded
@@ -71,18 +73,56 @@ class Relabeler:
         """The problem's profile names, sorted."""
         return sorted(self.problem.objective.profiles)
 
-    def relabel(self, profile: str) -> Policy:
+    def node(self, state: EState) -> int | None:
+        """Return the id of the kept graph's node for the epistemic state ``state`` (C1: a
+        step's decision node or a reply node), None when the search never reached it. Joint
+        steps have no symmetry reduction, so the graph's states are the real ones: ``state`` is
+        looked up as it is (the semantics already normalise the worlds, C7)."""
+        gr = self.outcome.graph
+        if gr.sym is not None:  # not reached: preferences are joint steps, never reduced
+            raise ValueError("the kept graph is over canonical states: relabel from its root")
+        return gr.index.get(state)
+
+    def relabel(self, profile: str, at: EState | None = None, *,
+                after: Sequence[str] | None = None) -> Policy:
         """Return the policy optimal for ``profile`` (one of the problem's
-        ``[objective.profiles]``; :class:`KeyError` otherwise) on the kept graph."""
+        ``[objective.profiles]``; :class:`KeyError` otherwise) on the kept graph (C11).
+
+        From the root by default. With ``at``, an epistemic state of the kept graph (an
+        executor's current state, :meth:`ehatp.run.executor.Executor.switch_profile`), the
+        policy's root is that state's node: the values are computed for ``profile`` on what
+        that node reaches and the policy extracted from it, the sub-policy a fresh solve of the
+        problem played up to ``at`` would choose. ``after`` (required with ``at``) is the
+        moves played from the problem's start to ``at``, as ``[problem] after`` lists them
+        (``Executor.as_problem().after``): the policy's own opening, so that the policy is one
+        of that problem and validates as such. :class:`ValueError` when ``at`` is not in the
+        kept graph (the search never reached it: plan again from there instead) or no policy
+        reaches the goal from it."""
         obj = self.problem.objective.with_profile(profile)
         out = self.outcome
         assert out.values is not None
-        values = compute_values(out.graph, out.root, obj)
-        if values.value[out.root] == INF:
-            raise ValueError("the kept graph has no policy")
+        root = out.root
+        if at is not None:
+            if after is None:
+                raise ValueError("relabelling from a state needs after=, the moves played to "
+                                 "reach it")
+            n = self.node(at)
+            if n is None:
+                raise ValueError("this state is not in the kept graph (the search never "
+                                 "reached it, e.g. after a replan that left it): plan again "
+                                 "from here instead of relabelling")
+            root = n
+        values = compute_values(out.graph, root, obj)
+        if values.value[root] == INF:
+            raise ValueError("the kept graph has no policy" + ("" if at is None
+                                                                  else " from this state"))
         optimal = values.exact and (out.optimal or not out.values.exact)
-        return extract(out.graph, out.root, values, problem_name=self.problem.name,
-                       optimal=optimal, stats=self.stats, objective=obj)
+        policy = extract(out.graph, root, values, problem_name=self.problem.name,
+                         optimal=optimal, stats=self.stats, objective=obj)
+        if at is not None:
+            assert after is not None
+            policy.after = list(after)
+        return policy
 
 
 def relabel(result: Result, profile: str) -> Policy:
