@@ -158,7 +158,9 @@ def test_after_a_switch_at_a_step_start_the_robot_replies_as_the_new_profile(
     drop(b))``).
     Executed under ``hurry``: (pass, warm(b)), then the switch to ``lazy_human`` at S1 (a
     decision node). The human passes: the robot now grabs ``b`` (``hurry`` would put ``a``),
-    then puts ``a`` and drops ``b`` on the next two passes: the goal in 4 steps. The
+    then puts ``a`` and drops ``b`` on the next two passes (switching back to ``hurry``
+    after the grab changes nothing: from there both profiles do the same): the goal in 4
+    steps. The
     relabelled policy from S1 has ``lazy_human``'s vector (human_effort, makespan) at S1:
     max{(1, 1) by hput(b), (0, 3) by pass} = (1, 1), and S1 is in ``lazy_human``'s policy
     from the root (after its forced first step), so it is that policy's sub-policy there."""
@@ -181,7 +183,13 @@ def test_after_a_switch_at_a_step_start_the_robot_replies_as_the_new_profile(
     assert lazy is not None
     at = state_nodes(prefer(warmup(), "lazy_human"), lazy)[ex.state]
     assert shape(policy) == shape(lazy, at)
-    assert play(ex, "pass", "pass", "pass") == ["grab(b)", "put(a)", "drop(b)"]
+    assert play(ex, "pass") == ["grab(b)"]
+    # and back: from S2 (b held) the human can only pass, the robot puts a, then drops b,
+    # whatever the profile: hurry's (makespan, human_effort) from there is (2, 0)
+    back = ex.switch_profile(r, "hurry")
+    assert back.objective["value"] == [2, 0] and ex.problem.objective.profile == "hurry"
+    check_switch(ex, back)
+    assert play(ex, "pass", "pass") == ["put(a)", "drop(b)"]
     assert ex.done and ex.goal_reached and len(ex.history) == 8
 
 
@@ -217,14 +225,17 @@ def test_a_switch_from_a_state_the_new_profile_never_reaches_plans_from_it(
     check_switch(ex, policy)
 
 
+ROBOT_FIRST = dataclasses.replace(JOINT, first=ehatp.StepFirst.ROBOT)
 PROBLEMS = {"e1": lambda: chores(JOINT), "e2": lambda: two_hands(JOINT), "helper": helper,
-            "warmup": warmup}
+            "warmup": warmup, "e2-robot-first": lambda: two_hands(ROBOT_FIRST),
+            "warmup-robot-first": lambda: dataclasses.replace(warmup(), steps=ROBOT_FIRST)}
 
 
 @pytest.mark.parametrize("name", sorted(PROBLEMS))
 def test_switching_at_every_step_start_gives_the_fresh_solve_from_there(name: str) -> None:
-    """C11, on every step start (decision node) of every profile's policy, to every other
-    profile, both estimates: the policy relabelled there is valid for the execution so far
+    """C11, on every step start (decision node: the human's, or the robot's when it decides
+    first) of every profile's policy, to every profile, both estimates (a switch in the middle
+    of a step is refused): the policy relabelled there is valid for the execution so far
     with the new profile, the one its fresh solve gives node by node, and every branch from
     the switch reaches the goal; where the new profile's own policy from the root reaches
     that state, it is that policy's sub-policy there, node by node."""
@@ -243,13 +254,12 @@ def test_switching_at_every_step_start_gives_the_fresh_solve_from_there(name: st
                 ex = stack.pop()
                 if ex.done:
                     continue
-                if ex.next_robot_action() is not None:
-                    ex.robot_action_done()
-                    stack.append(ex)
-                    continue
-                assert ex.node is not None
                 for new in PROFILES:
                     other = ex.copy()
+                    if ex.state.pending:  # mid-step: refused
+                        with pytest.raises(ExecutionError, match="middle of a step"):
+                            other.switch_profile(r, new)
+                        continue
                     policy = other.switch_profile(r, new)
                     check_switch(other, policy)
                     switches += 1
@@ -258,6 +268,11 @@ def test_switching_at_every_step_start_gives_the_fresh_solve_from_there(name: st
                         pol = fresh[new]
                         assert pol is not None
                         assert shape(policy) == shape(pol, at)
+                if ex.next_robot_action() is not None:
+                    ex.robot_action_done()
+                    stack.append(ex)
+                    continue
+                assert ex.node is not None
                 for label in [m.action for m in ex.node.moves]:
                     nxt = ex.copy()
                     nxt.observe_human_action(label)
@@ -303,7 +318,7 @@ def test_a_switch_is_refused_in_one_clear_error_where_it_cannot_be_made() -> Non
     refused("the task is done", done)
 
 
-def test_a_profile_line_switches_the_execution_over_the_protocol() -> None:
+def test_a_profile_line_switches_the_execution_over_the_protocol(tmp_path: Any) -> None:
     """``{"profile": NAME}`` in ``ehatp execute`` (docs/execution.md), on :func:`warmup`
     under ``hurry`` (the derivation above): after (pass, warm(b)) the line switches to
     ``lazy_human``: a ``switched`` line (after 2 moves; the vector (1, 1) of the policy from
@@ -314,7 +329,9 @@ def test_a_profile_line_switches_the_execution_over_the_protocol() -> None:
     the human's own moves progress it, §1), then the waiting line again; the human passes
     and the robot grabs
     ``b``; the goal after 8 moves. Refused as ``bad-request``: a profile that is not a
-    string, one the problem does not name; as ``wrong-turn``: in the middle of a step."""
+    string, one the problem does not name; as ``wrong-turn``: in the middle of a step. With
+    ``--save-replans`` the relabelled policy is written (``profile-1.json``): a valid policy
+    of the problem played up to the switch with ``lazy_human`` chosen."""
     p = prefer(warmup(), "hurry")
     r = kept(p)
     assert r.policy is not None
@@ -322,10 +339,13 @@ def test_a_profile_line_switches_the_execution_over_the_protocol() -> None:
         {"human": "pass"}, {"profile": "lazy_human"}, {"robot_done": "warm(b)"},
         {"profile": 3}, {"profile": "shy"}, {"profile": "lazy_human"}, {"human": "pass"},
         {"robot_done": "grab(b)"}, {"human": "pass"}, {"robot_done": True},
-        {"human": "pass"}, {"robot_done": True}), graph=r.graph)
+        {"human": "pass"}, {"robot_done": True}), graph=r.graph, save=tmp_path)
     errors = [(m["error"], m["line"]) for m in out if "error" in m]
     assert errors == [("wrong-turn", 2), ("bad-request", 4), ("bad-request", 5)]
     [switched] = [m["switched"] for m in out if "switched" in m]
+    written = Policy.read(switched.pop("policy"))  # --save-replans: profile-1.json
+    after = dataclasses.replace(prefer(warmup(), "lazy_human"), after=("H pass", "R warm(b)"))
+    assert written.after == ["H pass", "R warm(b)"] and ehatp.validate(after, written).ok
     assert switched == {"profile": "lazy_human", "after": 2, "cost": 3, "nodes": 9,
                         "metrics": ["human_effort", "makespan"], "value": [1, 1]}
     assert [m["robot"]["action"] for m in out if "robot" in m] == [
@@ -357,3 +377,31 @@ def test_ehatp_execute_keeps_the_graph_of_a_preferences_problem(tmp_path: Any) -
     assert out[3]["error"] == "bad-request" and "early, hurry, lazy_human" in out[3]["message"]
     assert out[4]["switched"]["profile"] == "lazy_human" and out[4]["switched"]["after"] == 0
     assert "waiting" in out[5] and out[6]["error"] == "end-of-input"
+
+
+def test_a_replan_keeps_its_own_graph_for_the_next_profile_line() -> None:
+    """On :func:`warmup` under ``hurry``: the robot's ``warm(b)`` fails (it did not happen),
+    so execute plans again from the same state (the reply node after the human's pass: its
+    only reply is ``warm(b)`` again) and keeps that search's graph; once the step is done, a
+    ``profile`` line relabels the new graph: ``lazy_human`` from S1, (1, 1), and the robot
+    grabs ``b`` on the human's pass."""
+    from ehatp.run.execute import Session
+
+    p = prefer(warmup(), "hurry")
+    r = kept(p)
+    assert r.policy is not None
+    out: list[dict[str, Any]] = []
+    s = Session(Executor(p, r.policy), out.append, replan=False, graph=r.graph)
+    s.start("test")
+    for i, msg in enumerate(({"human": "pass"}, {"robot_failed": "warm(b)"},
+                             {"robot_done": "warm(b)"}, {"profile": "lazy_human"},
+                             {"human": "pass"}), 1):
+        s.handle(lines(msg), i)
+    assert s.graph is not None and s.graph is not r.graph
+    assert s.graph.problem.after == ("H pass",)  # planned from the reply node
+    assert [m["replanned"]["outcome"] for m in out if "replanned" in m] == [None]
+    [switched] = [m["switched"] for m in out if "switched" in m]
+    assert (switched["after"], switched["value"]) == (2, [1, 1])
+    assert [m["robot"]["action"] for m in out if "robot" in m] == [
+        "warm(b)", "warm(b)", "grab(b)"]
+    assert not [m for m in out if "error" in m]

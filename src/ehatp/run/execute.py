@@ -6,15 +6,17 @@ and talks to it through stdin and stdout, one JSON object a line. In: what the h
 (``{"human": "pick(w)"}``), that the robot is done (``{"robot_done": "pick(r)"}`` or
 ``{"robot_done": true}``), or that its action failed (``{"robot_failed": "pick(r)"}``: it did
 not happen; ``{"robot_failed": {"action": "pick(r)", "observed": [...]}}``: it had another
-outcome, the facts observed). Out: what the robot should do (``{"robot": {...}}``), that the
-human is to act (``{"waiting": {...}}``), what the human now believes (``{"beliefs": {...}}``),
-the goal (``{"goal": true, ...}``) and errors (``{"error": KIND, ...}``), each with its number
-(``"seq"``: 1, 2, ...). With ``--replan`` a human action the policy does not cover, but the
-human model allows, is applied and the robot replans from there (``{"replanned": {...}}``): a
-move the model allows, or a ``pass`` the fairness rule lets a policy leave out
-(docs/semantics.md §4); only an impossible move is an error. A failed robot action is always
-replanned from: from the same state when it did not happen, else after the robot's action
-whose outcome the observed facts describe. See ``docs/execution.md``.
+outcome, the facts observed), and, for a preferences problem, that the human's preferences are
+learnt to be another profile (``{"profile": "lazy_human"}``: the kept graph relabelled from the
+current state at a step's start, C11: ``{"switched": {...}}``). Out: what the robot should do
+(``{"robot": {...}}``), that the human is to act (``{"waiting": {...}}``), what the human now
+believes (``{"beliefs": {...}}``), the goal (``{"goal": true, ...}``) and errors (``{"error":
+KIND, ...}``), each with its number (``"seq"``: 1, 2, ...). With ``--replan`` a human action the
+policy does not cover, but the human model allows, is applied and the robot replans from there
+(``{"replanned": {...}}``): a move the model allows, or a ``pass`` the fairness rule lets a
+policy leave out (docs/semantics.md §4); only an impossible move is an error. A failed robot
+action is always replanned from: from the same state when it did not happen, else after the
+robot's action whose outcome the observed facts describe. See ``docs/execution.md``.
 
 Exit codes (:func:`run` returns them): 0 the goal is reached; 1 the input ended before the goal,
 or replanning found no policy; 2 a policy that turns out not to fit the problem (a
@@ -91,6 +93,7 @@ class Session:
         self.limits: dict[str, Any] = {"timeout": timeout, "max_memory": max_memory}
         self.exit: int | None = None  # set when the session is over
         self.replans = 0
+        self.switches = 0  # profile switches so far
         self.seq = 0  # output lines so far
 
     def emit(self, message: dict[str, Any]) -> None:
@@ -231,11 +234,26 @@ class Session:
         except ExecutionError as e:
             self.error("no-relabel", str(e), line)
             return
-        self.emit({"switched": {
+        self.switches += 1
+        info: dict[str, Any] = {
             "profile": name, "after": len(ex.history), "cost": num(policy.cost),
             "nodes": len(policy.nodes), "metrics": list(policy.objective["metrics"]),
-            "value": list(policy.objective["value"])}})
+            "value": list(policy.objective["value"])}
+        if self.save is not None:
+            path = self.save / f"profile-{self.switches}.json"
+            try:
+                self.save.mkdir(parents=True, exist_ok=True)
+                policy.write(path)
+                info["policy"] = str(path)
+            except OSError as e:
+                info["policy_error"] = f"{path}: cannot write ({e.strerror or e})"
+        self.emit({"switched": info})
         self.prompt()
+
+    def keep(self) -> dict[str, Any]:
+        """The option that keeps a replan's graph: a preferences problem's only (C11)."""
+        kind = self.ex.problem.objective.kind
+        return {"keep_graph": True} if kind == ObjectiveKind.PREFERENCES else {}
 
     def kept(self, result: Result) -> None:
         """Keep the graph of a replan's search (C11), which holds the states from here."""
@@ -283,7 +301,7 @@ class Session:
     def replan_after(self, label: str, line: int) -> None:
         ex = self.ex
         try:
-            result = ex.replan(label, keep_graph=True, **self.limits)
+            result = ex.replan(label, **self.keep(), **self.limits)
         except UncoveredHumanAction as e:
             self.error("uncovered", str(e), line, action=e.action, expected=e.expected,
                        possible=e.possible)
@@ -419,7 +437,7 @@ class Session:
         """The robot's action did not happen: plan again from the same state."""
         ex = self.ex
         try:
-            result = ex.replan(keep_graph=True, **self.limits)
+            result = ex.replan(**self.keep(), **self.limits)
         except PolicyMismatch:
             raise
         except ExecutionError as e:
@@ -444,7 +462,7 @@ class Session:
                   f"{ex.robot_name} {ex.sem.trace_label(ex.state, move)}")
         problem = dataclasses.replace(ex.as_problem(), after=played)
         try:
-            result = solve(problem, keep_graph=True)
+            result = solve(problem, **self.keep())
         except InputError as e:  # the planner cannot replay the execution as an opening
             result = None
             why = f"the planner does not replay the execution ({e.problem})"
