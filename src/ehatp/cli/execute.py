@@ -75,6 +75,10 @@ def execute_cmd(
     finished) and on stdout (what the robot should do, what the human believes, the goal,
     errors), for a robot process to run as a subprocess. See docs/execution.md.
 
+    A preferences problem keeps its explored graph (searched once at the start, also with
+    --policy), so that a {"profile": NAME} line switches profile at a step's start without
+    a new search.
+
     Exit code 0: goal reached; 1: the input ended first, or no policy after replanning;
     2: bad problem or policy."""
     memory = memory_option(max_memory)
