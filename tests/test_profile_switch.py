@@ -405,3 +405,30 @@ def test_a_replan_keeps_its_own_graph_for_the_next_profile_line() -> None:
     assert [m["robot"]["action"] for m in out if "robot" in m] == [
         "warm(b)", "warm(b)", "grab(b)"]
     assert not [m for m in out if "error" in m]
+
+
+def test_relabelling_from_the_moves_alone_needs_no_executor() -> None:
+    """``Relabeler.relabel(profile, after=moves)`` replays the moves through the search's
+    semantics and relabels from the state they reach: on :func:`warmup`, after (pass,
+    warm(b)), (pass, grab(b)) ``hurry`` from S2 is (pass, put(a)), (pass, drop(b)): vector
+    (2, 0), 5 nodes (derived above), the executor's switch there node for node. Moves that
+    cannot be played, that reach another state than ``at``, or ``at`` without them, are one
+    ``ValueError`` each."""
+    p = prefer(warmup(), "lazy_human")
+    r = kept(p)
+    assert r.policy is not None and r.graph is not None
+    moves = ("H pass", "R warm(b)", "H pass", "R grab(b)")
+    policy = r.graph.relabel("hurry", after=moves)
+    assert (policy.objective["value"], len(policy.nodes)) == ([2, 0], 5)
+    assert policy.after == list(moves)
+    later = dataclasses.replace(prefer(warmup(), "hurry"), after=moves)
+    assert ehatp.validate(later, policy).ok and walk_policy(later, policy).ok
+    ex = Executor(p, r.policy)
+    play(ex, "pass", "pass")
+    assert shape(ex.switch_profile(r, "hurry")) == shape(policy)
+    with pytest.raises(ValueError, match=r"move 2, 'R put\(a\)'"):
+        r.graph.relabel("hurry", after=("H pass", "R put(a)"))
+    with pytest.raises(ValueError, match="do not reach the state given"):
+        r.graph.relabel("hurry", at=ex.state, after=moves[:2])
+    with pytest.raises(ValueError, match="needs after="):
+        r.graph.relabel("hurry", at=ex.state)

@@ -379,8 +379,9 @@ class Executor:
 
         The current state was reached through the old profile's choices and need not be in
         the new profile's policy from the root, so the new policy's root is the current
-        state's node of the kept graph (:meth:`Relabeler.relabel` with ``at``), and its
-        opening (``after``) the moves played so far: it is a policy of :meth:`as_problem` with
+        state's node of the kept graph (:meth:`Relabeler.relabel` with ``after`` the moves
+        played so far, which reach it, and ``at`` the tracked state, checked against them),
+        and its opening (``after``) those moves: it is a policy of :meth:`as_problem` with
         ``profile`` chosen, which becomes :attr:`problem` (a later :meth:`replan` plans for
         ``profile``). The history is kept; the new root is checked against the tracked state
         as every node is. Returns the new policy.
