@@ -284,8 +284,9 @@ def test_a_switch_is_refused_in_one_clear_error_where_it_cannot_be_made() -> Non
     """Each refusal is one :class:`ExecutionError` naming the reason, and nothing changes:
     in the middle of a step (the human passed, the robot's reply is due); an unknown profile
     (the known ones named); a problem without preference profiles; no graph kept; during
-    the fixed opening; once the task is done; and a state the kept graph does not hold (the
-    graph of the problem played from S1, :func:`warmup`'s second step, holds no root S0)."""
+    the fixed opening; once the task is done; a state the kept graph does not hold (the graph
+    of the problem played from S1, :func:`warmup`'s second step, holds no root S0); the graph
+    of another problem; a graph whose problem lacks the profile."""
     p = prefer(warmup(), "hurry")
     r = kept(p)
     assert r.policy is not None and r.graph is not None
@@ -316,6 +317,12 @@ def test_a_switch_is_refused_in_one_clear_error_where_it_cannot_be_made() -> Non
     play(done, "pass", "hput(b)")
     assert done.done
     refused("the task is done", done)
+    refused("the kept graph is of problem 'helper', not of this execution's 'warmup'",
+            Executor(p, r.policy), graph=kept(prefer(helper(), "hurry")))
+    fewer = dataclasses.replace(p, objective=dataclasses.replace(
+        p.objective, profiles={"hurry": PROFILES["hurry"]}))
+    refused("cannot switch to profile 'lazy_human': no profile 'lazy_human': the problem "
+            "names hurry", Executor(p, r.policy), graph=kept(fewer))
 
 
 def test_a_profile_line_switches_the_execution_over_the_protocol(tmp_path: Any) -> None:

@@ -419,13 +419,15 @@ class Executor:
         if (kept.problem.name != self.problem.name
                 or kept.outcome.graph.sem.grounded.atoms != self.grounded.atoms
                 or kept.outcome.graph.sem.grounded.task_names != self.grounded.task_names):
-            raise ExecutionError(f"the kept graph is problem {kept.problem.name!r}'s, not this "
-                                 "execution's: keep the graph of this problem's solve")
+            raise ExecutionError(f"the kept graph is of problem {kept.problem.name!r}, not of "
+                                 f"this execution's {self.problem.name!r}: keep the graph of "
+                                 "this problem's solve")
         played = tuple(s.played for s in self.history)
         try:
             policy = kept.relabel(profile, at=self.state, after=played)
-        except ValueError as e:
-            raise ExecutionError(f"cannot switch to profile {profile!r}: {e}") from None
+        except (KeyError, ValueError) as e:  # KeyError: the kept graph's problem lacks it
+            raise ExecutionError(f"cannot switch to profile {profile!r}: {e.args[0]}"
+                                 ) from None
         desc = self.problem.description
         problem = dataclasses.replace(
             self.problem, after=played, notes=(), objective=obj.with_profile(profile),
