@@ -19,6 +19,7 @@ import typer
 
 from ..errors import ExecutionError, InputError, PolicyMismatch
 from ..formats.policy_check import read_policy
+from ..model.options import ObjectiveKind
 from ..run.execute import EXIT_STOPPED, Emit, replans_folder, run
 from ..run.executor import Executor
 from .common import command_app, load_problem, memory_option, user_errors
@@ -74,6 +75,10 @@ def execute_cmd(
     finished) and on stdout (what the robot should do, what the human believes, the goal,
     errors), for a robot process to run as a subprocess. See docs/execution.md.
 
+    A preferences problem keeps its explored graph (searched once at the start, also with
+    --policy), so that a {"profile": NAME} line switches profile at a step's start without
+    a new search.
+
     Exit code 0: goal reached; 1: the input ended first, or no policy after replanning;
     2: bad problem or policy."""
     memory = memory_option(max_memory)
@@ -94,6 +99,20 @@ def execute_cmd(
         with user_errors(policy):
             pol = read_policy(policy)
     where = str(policy) if policy is not None else str(problem)
+    graph = None
+    if prob.objective.kind == ObjectiveKind.PREFERENCES:  # C11: kept for {"profile": NAME}
+        from ..search.planner import solve  # as the executor loads it: when planning
+
+        with user_errors(problem):
+            result = solve(prob, keep_graph=True)
+        graph = result.graph
+        if pol is None:
+            pol = result.policy
+            if pol is None:
+                typer.echo(json.dumps({"error": "no-policy", "message": f"{problem}: no policy "
+                                       f"to execute: {result.reason or result.status}",
+                                       "line": 0, "seq": 1}))
+                raise typer.Exit(EXIT_STOPPED)
     with user_errors(where):
         try:
             ex = Executor(prob, pol)
@@ -110,5 +129,6 @@ def execute_cmd(
     code = run(ex, sys.stdin, safe_json_lines(sys.stdout), replan=replan,
                source=str(policy) if policy is not None else "solved now",
                save=save_replans, timeout=timeout, max_memory=memory,
-               decision_timeout=decision_timeout, recognition_latency=recognition_latency)
+               decision_timeout=decision_timeout, recognition_latency=recognition_latency,
+               graph=graph)
     raise typer.Exit(code)

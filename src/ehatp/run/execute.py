@@ -6,15 +6,17 @@ and talks to it through stdin and stdout, one JSON object a line. In: what the h
 (``{"human": "pick(w)"}``), that the robot is done (``{"robot_done": "pick(r)"}`` or
 ``{"robot_done": true}``), or that its action failed (``{"robot_failed": "pick(r)"}``: it did
 not happen; ``{"robot_failed": {"action": "pick(r)", "observed": [...]}}``: it had another
-outcome, the facts observed). Out: what the robot should do (``{"robot": {...}}``), that the
-human is to act (``{"waiting": {...}}``), what the human now believes (``{"beliefs": {...}}``),
-the goal (``{"goal": true, ...}``) and errors (``{"error": KIND, ...}``), each with its number
-(``"seq"``: 1, 2, ...). With ``--replan`` a human action the policy does not cover, but the
-human model allows, is applied and the robot replans from there (``{"replanned": {...}}``): a
-move the model allows, or a ``pass`` the fairness rule lets a policy leave out
-(docs/semantics.md §4); only an impossible move is an error. A failed robot action is always
-replanned from: from the same state when it did not happen, else after the robot's action
-whose outcome the observed facts describe. See ``docs/execution.md``.
+outcome, the facts observed), and, for a preferences problem, that the human's preferences are
+learnt to be another profile (``{"profile": "lazy_human"}``: the kept graph relabelled from the
+current state at a step's start, C11: ``{"switched": {...}}``). Out: what the robot should do
+(``{"robot": {...}}``), that the human is to act (``{"waiting": {...}}``), what the human now
+believes (``{"beliefs": {...}}``), the goal (``{"goal": true, ...}``) and errors (``{"error":
+KIND, ...}``), each with its number (``"seq"``: 1, 2, ...). With ``--replan`` a human action the
+policy does not cover, but the human model allows, is applied and the robot replans from there
+(``{"replanned": {...}}``): a move the model allows, or a ``pass`` the fairness rule lets a
+policy leave out (docs/semantics.md §4); only an impossible move is an error. A failed robot
+action is always replanned from: from the same state when it did not happen, else after the
+robot's action whose outcome the observed facts describe. See ``docs/execution.md``.
 
 Exit codes (:func:`run` returns them): 0 the goal is reached; 1 the input ended before the goal,
 or replanning found no policy; 2 a policy that turns out not to fit the problem (a
@@ -33,16 +35,17 @@ from typing import TYPE_CHECKING, Any, TextIO
 from ..epistemic.semantics import Move
 from ..errors import ExecutionError, InputError, PolicyMismatch, UncoveredHumanAction
 from ..formats.policy import label_key, num
+from ..model.options import ObjectiveKind
 from ..model.vocabulary import MoveKind
 from .executor import Action, Executor, Step
 
 if TYPE_CHECKING:
-    from ..search.planner import Result
+    from ..search.planner import Relabeler, Result
 
 EXIT_GOAL, EXIT_STOPPED, EXIT_BAD = 0, 1, 2
 
 Emit = Callable[[dict[str, Any]], None]
-REQUESTS = ("human", "robot_done", "robot_failed")
+REQUESTS = ("human", "robot_done", "robot_failed", "profile")
 SHOWN = 60  # characters of a bad label an error line repeats in its message
 NOTHING = object()  # a failed robot action's outcome: it did not happen
 
@@ -78,14 +81,19 @@ class Session:
     def __init__(self, ex: Executor, emit: Emit, *, replan: bool,
                  save: Path | None = None, timeout: float | None = None,
                  max_memory: int | None = None,
-                 timing: dict[str, float | None] | None = None) -> None:
+                 timing: dict[str, float | None] | None = None,
+                 graph: Relabeler | None = None) -> None:
         self.ex, self.out, self.replan, self.save = ex, emit, replan, save
+        # a preferences problem (C11): the explored graph kept, for {"profile": NAME} lines;
+        # each replan keeps its own (it holds the states the execution now reaches)
+        self.graph = graph
         # joint steps: the step's timing the waiting lines carry (docs/execution.md)
         self.timing = timing or {"decision_timeout": None, "recognition_latency": None}
         # each replan's limits (None: the problem's [limits])
         self.limits: dict[str, Any] = {"timeout": timeout, "max_memory": max_memory}
         self.exit: int | None = None  # set when the session is over
         self.replans = 0
+        self.switches = 0  # profile switches so far
         self.seq = 0  # output lines so far
 
     def emit(self, message: dict[str, Any]) -> None:
@@ -150,11 +158,13 @@ class Session:
             self.error("bad-request", 'expected one of {"human": "ACTION"}, '
                        '{"robot_done": "ACTION"} or {"robot_done": true}, '
                        '{"robot_failed": "ACTION"} or {"robot_failed": {"action": "ACTION", '
-                       '"observed": ["FACT", "not FACT"]}}', line)
+                       '"observed": ["FACT", "not FACT"]}}, {"profile": "NAME"}', line)
             return
         key, value = next(iter(msg.items()))
         try:
-            if key == "robot_done":
+            if key == "profile":
+                self.profile(value, line)
+            elif key == "robot_done":
                 if value is not True and not isinstance(value, str):
                     self.error("bad-request", "robot_done takes the action's label or true",
                                line)
@@ -188,6 +198,67 @@ class Session:
         self.error("bad-request", f"{shown!r} is not a move label: {why}; write it as the "
                    "policy prints it, e.g. place(w, box2)", line, action=label)
         return True
+
+    def profile(self, name: object, line: int) -> None:
+        """``{"profile": NAME}`` (C11, a preferences problem): the human's preferences are
+        learnt to be profile ``NAME``; the robot follows from now on the policy that profile
+        prefers, relabelled from the current state on the kept graph (no new search,
+        :meth:`Executor.switch_profile`), at the start of a step only."""
+        ex = self.ex
+        obj = ex.problem.objective
+        if not isinstance(name, str):
+            self.error("bad-request", 'profile takes a profile\'s name, e.g. {"profile": '
+                       '"lazy_human"}', line)
+            return
+        if obj.kind != ObjectiveKind.PREFERENCES:
+            self.error("bad-request", f"profile {name[:SHOWN]!r}: this problem has no "
+                       'preference profiles ([objective] kind = "preferences" with '
+                       "[objective.profiles])", line)
+            return
+        if name not in obj.profiles:
+            self.error("bad-request", f"no profile {name[:SHOWN]!r}: the problem names "
+                       + ", ".join(sorted(obj.profiles)), line, profiles=sorted(obj.profiles))
+            return
+        if ex.state.pending:
+            self.error("wrong-turn", f"in the middle of a step ({ex.to_move}'s reply is due):"
+                       " send the profile at the start of a step", line)
+            return
+        if self.graph is None:
+            self.error("no-relabel", "no explored graph is kept (its search stopped at a limit)"
+                       ": the profile cannot be relabelled", line)
+            return
+        try:
+            policy = ex.switch_profile(self.graph, name)
+        except PolicyMismatch:
+            raise
+        except ExecutionError as e:
+            self.error("no-relabel", str(e), line)
+            return
+        self.switches += 1
+        info: dict[str, Any] = {
+            "profile": name, "after": len(ex.history), "cost": num(policy.cost),
+            "nodes": len(policy.nodes), "metrics": list(policy.objective["metrics"]),
+            "value": list(policy.objective["value"])}
+        if self.save is not None:
+            path = self.save / f"profile-{self.switches}.json"
+            try:
+                self.save.mkdir(parents=True, exist_ok=True)
+                policy.write(path)
+                info["policy"] = str(path)
+            except OSError as e:
+                info["policy_error"] = f"{path}: cannot write ({e.strerror or e})"
+        self.emit({"switched": info})
+        self.prompt()
+
+    def keep(self) -> dict[str, Any]:
+        """The option that keeps a replan's graph: a preferences problem's only (C11)."""
+        kind = self.ex.problem.objective.kind
+        return {"keep_graph": True} if kind == ObjectiveKind.PREFERENCES else {}
+
+    def kept(self, result: Result) -> None:
+        """Keep the graph of a replan's search (C11), which holds the states from here."""
+        if result.graph is not None:
+            self.graph = result.graph
 
     def robot_done(self, label: str | None, line: int) -> None:
         ex = self.ex
@@ -230,7 +301,7 @@ class Session:
     def replan_after(self, label: str, line: int) -> None:
         ex = self.ex
         try:
-            result = ex.replan(label, **self.limits)
+            result = ex.replan(label, **self.keep(), **self.limits)
         except UncoveredHumanAction as e:
             self.error("uncovered", str(e), line, action=e.action, expected=e.expected,
                        possible=e.possible)
@@ -241,6 +312,7 @@ class Session:
             self.error("no-policy", str(e), line, action=label)
             self.exit = EXIT_STOPPED
             return
+        self.kept(result)
         self.replanned(result, {"action": label, "agent": ex.human_name, "failed": False})
         self.stepped(ex.history[-1])
 
@@ -365,13 +437,14 @@ class Session:
         """The robot's action did not happen: plan again from the same state."""
         ex = self.ex
         try:
-            result = ex.replan(**self.limits)
+            result = ex.replan(**self.keep(), **self.limits)
         except PolicyMismatch:
             raise
         except ExecutionError as e:
             self.error("no-policy", str(e), line, action=intended.label)
             self.exit = EXIT_STOPPED
             return
+        self.kept(result)
         self.replanned(result, {"action": intended.label, "agent": ex.robot_name,
                                 "failed": True, "outcome": None,
                                 **({} if observed is None else {"observed": observed})})
@@ -389,7 +462,7 @@ class Session:
                   f"{ex.robot_name} {ex.sem.trace_label(ex.state, move)}")
         problem = dataclasses.replace(ex.as_problem(), after=played)
         try:
-            result = solve(problem)
+            result = solve(problem, **self.keep())
         except InputError as e:  # the planner cannot replay the execution as an opening
             result = None
             why = f"the planner does not replay the execution ({e.problem})"
@@ -402,6 +475,7 @@ class Session:
         new = Executor(problem, result.policy)
         new.replay_opening()
         self.ex = new
+        self.kept(result)
         self.replanned(result, {"action": intended.label, "agent": new.robot_name,
                                 "failed": True, "outcome": new.history[-1].action.label,
                                 "observed": observed})
@@ -411,14 +485,16 @@ class Session:
 def run(ex: Executor, stdin: TextIO, emit: Emit, *, replan: bool = False,
         source: str = "solved now", save: Path | None = None, timeout: float | None = None,
         max_memory: int | None = None, decision_timeout: float | None = None,
-        recognition_latency: float | None = None) -> int:
+        recognition_latency: float | None = None, graph: Relabeler | None = None) -> int:
     """The protocol without the CLI: read ``stdin`` to the goal or its end; returns the exit
     code. ``save``: a folder where each replanned policy is written (``replan-N.json``);
     ``timeout`` (seconds) and ``max_memory`` (bytes): each replan's limits (None: the
     problem's). ``decision_timeout`` and ``recognition_latency`` (seconds; joint steps): the
-    timing every ``waiting`` line of a joint-step problem carries (docs/execution.md)."""
+    timing every ``waiting`` line of a joint-step problem carries (docs/execution.md).
+    ``graph``: a preferences problem's explored graph (``solve(..., keep_graph=True).graph``),
+    relabelled when a ``{"profile": NAME}`` line comes (C11)."""
     session = Session(ex, emit, replan=replan, save=save, timeout=timeout,
-                      max_memory=max_memory,
+                      max_memory=max_memory, graph=graph,
                       timing={"decision_timeout": decision_timeout,
                               "recognition_latency": recognition_latency})
     try:

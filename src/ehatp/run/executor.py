@@ -58,7 +58,7 @@ from ..model.problem import Cost, Problem
 from ..model.vocabulary import HUMAN, ROBOT
 
 if TYPE_CHECKING:
-    from ..search.planner import Result
+    from ..search.planner import Relabeler, Result
 
 MAX_WORLDS_LISTED = 8
 
@@ -370,6 +370,79 @@ class Executor:
                                      assessed if assessed != self.state.worlds else None,
                                      replanned=True))
         return result
+
+    def switch_profile(self, graph: Relabeler | Result, profile: str) -> Policy:
+        """C11: follow from now on the policy optimal for another preference ``profile`` (the
+        human's true one, learnt during the task), relabelled from the current state on the
+        explored graph ``graph`` kept by ``solve(problem, keep_graph=True)`` (the
+        :class:`~ehatp.search.planner.Relabeler`, or the result holding it): no new search.
+
+        The current state was reached through the old profile's choices and need not be in
+        the new profile's policy from the root, so the new policy's root is the current
+        state's node of the kept graph (:meth:`Relabeler.relabel` with ``after`` the moves
+        played so far, which reach it, and ``at`` the tracked state, checked against them),
+        and its opening (``after``) those moves: it is a policy of :meth:`as_problem` with
+        ``profile`` chosen, which becomes :attr:`problem` (a later :meth:`replan` plans for
+        ``profile``). The history is kept; the new root is checked against the tracked state
+        as every node is. Returns the new policy.
+
+        A switch is allowed at the start of a step (a decision node, docs/concurrent.md C1),
+        past the problem's fixed opening and before the goal: never in the middle of a step,
+        where the move decided first was chosen under the old profile and its reply is due.
+        Raises :class:`ExecutionError`, nothing changed, when the problem is no preferences
+        problem, ``profile`` is none of its profiles, no graph was kept, the switch comes at
+        another point, or the current state is not in the kept graph (after a replan that
+        left the explored graph: :meth:`replan` instead)."""
+        from ..model.options import ObjectiveKind
+        from ..search.planner import Result
+
+        obj = self.problem.objective
+        if obj.kind != ObjectiveKind.PREFERENCES:
+            raise ExecutionError(f"{self.problem.source}: cannot switch to profile {profile!r}:"
+                                 f' the problem\'s [objective] kind is "{obj.kind.value}", not '
+                                 '"preferences" with [objective.profiles]')
+        if profile not in obj.profiles:
+            raise ExecutionError(f"no profile {profile!r}: the problem names "
+                                 + ", ".join(sorted(obj.profiles)))
+        kept = graph.graph if isinstance(graph, Result) else graph
+        if kept is None:
+            raise ExecutionError("no explored graph was kept: solve with keep_graph=True")
+        if self.node is None:
+            raise ExecutionError("the problem's fixed opening is still being played: switch "
+                                 "profile once the policy is followed (replay_opening())")
+        if self.done:
+            raise ExecutionError("the task is done: there is nothing left to relabel")
+        if self.state.pending:
+            raise ExecutionError(f"in the middle of a step ({self.sem.names[self.state.turn]}"
+                                 "'s reply is due): switch profile at the start of a step, "
+                                 "once this one is done")
+        if (kept.problem.name != self.problem.name
+                or kept.outcome.graph.sem.grounded.atoms != self.grounded.atoms
+                or kept.outcome.graph.sem.grounded.task_names != self.grounded.task_names):
+            raise ExecutionError(f"the kept graph is of problem {kept.problem.name!r}, not of "
+                                 f"this execution's {self.problem.name!r}: keep the graph of "
+                                 "this problem's solve")
+        played = tuple(s.played for s in self.history)
+        try:
+            policy = kept.relabel(profile, at=self.state, after=played)
+        except (KeyError, ValueError) as e:  # KeyError: the kept graph's problem lacks it
+            raise ExecutionError(f"cannot switch to profile {profile!r}: {e.args[0]}"
+                                 ) from None
+        desc = self.problem.description
+        problem = dataclasses.replace(
+            self.problem, after=played, notes=(), objective=obj.with_profile(profile),
+            description=(f"{desc}; " if desc else "")
+            + f"profile {profile} after {len(played)} moves")
+        old = (self.policy, self._lifted, self.tau)
+        self._use(policy)
+        root = self._view(0)
+        try:
+            self._check(root)
+        except PolicyMismatch:
+            self.policy, self._lifted, self.tau = old
+            raise
+        self.problem, self.node = problem, root
+        return policy
 
     # -- what the human believes ------------------------------------------------------------------
     def human_worlds(self) -> list[WorldView]:

@@ -61,8 +61,21 @@ def walk_policy(problem: Problem, policy: Policy, *, cap: int = DEFAULT_CAP) -> 
         start.replay_opening()
     except ExecutionError as e:
         return WalkReport(False, 0, False, f"at the start: {e}")
+    return walk_from(start, cap=cap)
+
+
+def walk_from(start: Executor, *, cap: int = DEFAULT_CAP) -> WalkReport:
+    """Return how the policy ``start`` follows runs on every branch from where ``start`` is
+    (e.g. after :meth:`Executor.switch_profile`, C11), as :func:`walk_policy` walks a policy
+    from its root; ``start`` itself does not move (the walk plays copies). The branches' moves
+    in a failure's message are those played from that point."""
+    first = start.copy()
+    try:
+        first.replay_opening()
+    except ExecutionError as e:
+        return WalkReport(False, 0, False, f"at the start: {e}")
     # (executor, moves so far, the human move to feed first or None)
-    stack: list[tuple[Executor, list[str], str | None]] = [(start, [], None)]
+    stack: list[tuple[Executor, list[str], str | None]] = [(first, [], None)]
     branches = 0
     while stack:
         if branches >= cap:
@@ -281,4 +294,4 @@ def _failure(n: int, path: list[str], error: str) -> str:
     return f"branch {n} ({moves}): {error}"
 
 
-__all__ = ["DEFAULT_CAP", "WalkReport", "tick_py_trees", "walk_policy"]
+__all__ = ["DEFAULT_CAP", "WalkReport", "tick_py_trees", "walk_from", "walk_policy"]

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from ..epistemic.state import EState
 from ..errors import InputError
 from ..formats.policy import Policy
 from ..model.grounded import Grounded
@@ -71,18 +73,74 @@ class Relabeler:
         """The problem's profile names, sorted."""
         return sorted(self.problem.objective.profiles)
 
-    def relabel(self, profile: str) -> Policy:
+    def node(self, state: EState) -> int | None:
+        """Return the id of the kept graph's node for the epistemic state ``state`` (C1: a
+        step's decision node or a reply node), None when the search never reached it. Joint
+        steps have no symmetry reduction, so the graph's states are the real ones: ``state`` is
+        looked up as it is (the semantics already normalise the worlds, C7)."""
+        gr = self.outcome.graph
+        if gr.sym is not None:  # not reached: preferences are joint steps, never reduced
+            raise ValueError("the kept graph is over canonical states: relabel from its root")
+        return gr.index.get(state)
+
+    def relabel(self, profile: str, at: EState | None = None, *,
+                after: Sequence[str] | None = None) -> Policy:
         """Return the policy optimal for ``profile`` (one of the problem's
-        ``[objective.profiles]``; :class:`KeyError` otherwise) on the kept graph."""
+        ``[objective.profiles]``; :class:`KeyError` otherwise) on the kept graph (C11).
+
+        From the root by default. With ``after``, the moves played from the problem's start,
+        as ``[problem] after`` lists them (``Executor.as_problem().after``), the policy's root
+        is the node of the state they reach (replayed through the search's own semantics, as
+        the search replays an opening): the values are computed for ``profile`` on what that
+        node reaches and the policy extracted from it, the policy a fresh solve of the problem
+        played up to there would choose; its ``after`` is those moves, so that it is a policy
+        of that problem and validates as such. ``at``, the state an executor tracks there
+        (:meth:`ehatp.run.executor.Executor.switch_profile`), is checked against the replay.
+        :class:`ValueError` when the moves cannot be played, do not reach ``at``, or reach a
+        state not in the kept graph (the search never reached it: plan again from there
+        instead), or no policy reaches the goal from it."""
         obj = self.problem.objective.with_profile(profile)
         out = self.outcome
         assert out.values is not None
-        values = compute_values(out.graph, out.root, obj)
-        if values.value[out.root] == INF:
-            raise ValueError("the kept graph has no policy")
+        root = out.root
+        if after is not None:
+            state = self._replay(after)
+            if at is not None and state != at:
+                raise ValueError("the moves given do not reach the state given")
+            n = self.node(state)
+            if n is None:
+                raise ValueError("this state is not in the kept graph (the search never "
+                                 "reached it, e.g. after a replan that left it): plan again "
+                                 "from here instead of relabelling")
+            root = n
+        elif at is not None:
+            raise ValueError("relabelling from a state needs after=, the moves played to "
+                             "reach it")
+        values = compute_values(out.graph, root, obj)
+        if values.value[root] == INF:
+            raise ValueError("the kept graph has no policy" + ("" if after is None
+                                                                  else " from this state"))
         optimal = values.exact and (out.optimal or not out.values.exact)
-        return extract(out.graph, out.root, values, problem_name=self.problem.name,
-                       optimal=optimal, stats=self.stats, objective=obj)
+        policy = extract(out.graph, root, values, problem_name=self.problem.name,
+                         optimal=optimal, stats=self.stats, objective=obj)
+        if after is not None:
+            policy.after = list(after)
+        return policy
+
+    def _replay(self, after: Sequence[str]) -> EState:
+        """The state the moves ``after`` reach from the problem's start (§4: each a move
+        possible at that point; :class:`ValueError` naming the move otherwise)."""
+        sem = self.outcome.graph.sem
+        es = sem.initial()
+        for i, label in enumerate(after):
+            try:
+                child = sem.follow(es, label).child
+            except ValueError as e:
+                raise ValueError(f"move {i + 1}, {label!r}: {e}") from None
+            if child is None:
+                raise ValueError(f"move {i + 1}, {label!r}, fails")
+            es = child
+        return es
 
 
 def relabel(result: Result, profile: str) -> Policy:
