@@ -7,6 +7,7 @@ the derivation is in each test's docstring."""
 from __future__ import annotations
 
 import dataclasses
+import json
 from typing import Any
 
 import pytest
@@ -384,6 +385,38 @@ def test_ehatp_execute_keeps_the_graph_of_a_preferences_problem(tmp_path: Any) -
     assert out[3]["error"] == "bad-request" and "early, hurry, lazy_human" in out[3]["message"]
     assert out[4]["switched"]["profile"] == "lazy_human" and out[4]["switched"]["after"] == 0
     assert "waiting" in out[5] and out[6]["error"] == "end-of-input"
+
+
+def test_ehatp_execute_with_a_policy_and_no_keep_graph_searches_nothing(
+        tmp_path: Any, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``--no-keep-graph`` with ``--policy``: the policy is followed with no search at the
+    start (the planner, patched to fail, is never called), and a ``profile`` line is one
+    ``no-relabel`` error saying why; without the flag the same command searches once."""
+    from typer.testing import CliRunner
+
+    from ehatp.cli.app import app
+
+    f = p2(tmp_path)
+    pol = tmp_path / "p.json"
+    ehatp.solve(ehatp.load(f)).policy.write(pol)
+
+    calls: list[bool] = []
+
+    def no_search(*args: Any, **kw: Any) -> Any:
+        calls.append(kw.get("keep_graph", False))
+        raise AssertionError("searched")
+
+    monkeypatch.setattr(planner, "solve", no_search)
+    got = CliRunner().invoke(app, ["execute", str(f), "--policy", str(pol), "--no-keep-graph"],
+                             input=lines({"profile": "lazy_human"}))
+    out = [json.loads(x) for x in got.stdout.splitlines()]
+    assert got.exit_code == 1, got.output
+    assert [next(iter(m)) for m in out][:3] == ["start", "beliefs", "waiting"]
+    assert out[3]["error"] == "no-relabel" and "--no-keep-graph" in out[3]["message"]
+    assert calls == []
+    CliRunner().invoke(app, ["execute", str(f), "--policy", str(pol)],
+                       input=lines({"profile": "lazy_human"}))
+    assert calls == [True]
 
 
 def test_a_replan_keeps_its_own_graph_for_the_next_profile_line() -> None:

@@ -66,6 +66,10 @@ def execute_cmd(
         None, "--decision-timeout", min=0.0, metavar="SECONDS", help="Joint steps: how long "
         "the human has to start an action before the robot process reports a pass; carried "
         "in every waiting line (ehatp keeps no clock).", show_default=False),
+    keep_graph: bool = typer.Option(
+        True, "--keep-graph/--no-keep-graph", help="Preferences problems: keep the explored "
+        'graph (searched at the start, also with --policy) so that a {"profile": NAME} line '
+        "relabels it; --no-keep-graph: no search with --policy, profile lines refused."),
     recognition_latency: float | None = typer.Option(
         None, "--recognition-latency", min=0.0, metavar="SECONDS", help="Joint steps: how "
         "long after the human's action starts the robot process may report it; carried in "
@@ -76,8 +80,8 @@ def execute_cmd(
     errors), for a robot process to run as a subprocess. See docs/execution.md.
 
     A preferences problem keeps its explored graph (searched once at the start, also with
-    --policy), so that a {"profile": NAME} line switches profile at a step's start without
-    a new search.
+    --policy; not with --no-keep-graph), so that a {"profile": NAME} line switches profile at
+    a step's start without a new search.
 
     Exit code 0: goal reached; 1: the input ended first, or no policy after replanning;
     2: bad problem or policy."""
@@ -100,7 +104,8 @@ def execute_cmd(
             pol = read_policy(policy)
     where = str(policy) if policy is not None else str(problem)
     graph = None
-    if prob.objective.kind == ObjectiveKind.PREFERENCES:  # C11: kept for {"profile": NAME}
+    if keep_graph and prob.objective.kind == ObjectiveKind.PREFERENCES:  # C11: kept for
+        # {"profile": NAME} lines
         from ..search.planner import solve  # as the executor loads it: when planning
 
         with user_errors(problem):
@@ -130,5 +135,5 @@ def execute_cmd(
                source=str(policy) if policy is not None else "solved now",
                save=save_replans, timeout=timeout, max_memory=memory,
                decision_timeout=decision_timeout, recognition_latency=recognition_latency,
-               graph=graph)
+               graph=graph, relabel=keep_graph)
     raise typer.Exit(code)

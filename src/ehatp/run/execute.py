@@ -82,11 +82,13 @@ class Session:
                  save: Path | None = None, timeout: float | None = None,
                  max_memory: int | None = None,
                  timing: dict[str, float | None] | None = None,
-                 graph: Relabeler | None = None) -> None:
+                 graph: Relabeler | None = None, relabel: bool = True) -> None:
         self.ex, self.out, self.replan, self.save = ex, emit, replan, save
         # a preferences problem (C11): the explored graph kept, for {"profile": NAME} lines;
-        # each replan keeps its own (it holds the states the execution now reaches)
+        # each replan keeps its own (it holds the states the execution now reaches), unless
+        # relabelling is off (`ehatp execute --no-keep-graph`)
         self.graph = graph
+        self.relabel = relabel
         # joint steps: the step's timing the waiting lines carry (docs/execution.md)
         self.timing = timing or {"decision_timeout": None, "recognition_latency": None}
         # each replan's limits (None: the problem's [limits])
@@ -224,8 +226,10 @@ class Session:
                        " send the profile at the start of a step", line)
             return
         if self.graph is None:
-            self.error("no-relabel", "no explored graph is kept (its search stopped at a limit)"
-                       ": the profile cannot be relabelled", line)
+            why = ("its search stopped at a limit" if self.relabel
+                   else "ehatp execute was started with --no-keep-graph")
+            self.error("no-relabel", f"no explored graph is kept ({why}): the profile cannot "
+                       "be relabelled", line)
             return
         try:
             policy = ex.switch_profile(self.graph, name)
@@ -253,7 +257,8 @@ class Session:
     def keep(self) -> dict[str, Any]:
         """The option that keeps a replan's graph: a preferences problem's only (C11)."""
         kind = self.ex.problem.objective.kind
-        return {"keep_graph": True} if kind == ObjectiveKind.PREFERENCES else {}
+        return ({"keep_graph": True} if self.relabel and kind == ObjectiveKind.PREFERENCES
+                else {})
 
     def kept(self, result: Result) -> None:
         """Keep the graph of a replan's search (C11), which holds the states from here."""
@@ -485,16 +490,18 @@ class Session:
 def run(ex: Executor, stdin: TextIO, emit: Emit, *, replan: bool = False,
         source: str = "solved now", save: Path | None = None, timeout: float | None = None,
         max_memory: int | None = None, decision_timeout: float | None = None,
-        recognition_latency: float | None = None, graph: Relabeler | None = None) -> int:
+        recognition_latency: float | None = None, graph: Relabeler | None = None,
+        relabel: bool = True) -> int:
     """The protocol without the CLI: read ``stdin`` to the goal or its end; returns the exit
     code. ``save``: a folder where each replanned policy is written (``replan-N.json``);
     ``timeout`` (seconds) and ``max_memory`` (bytes): each replan's limits (None: the
     problem's). ``decision_timeout`` and ``recognition_latency`` (seconds; joint steps): the
     timing every ``waiting`` line of a joint-step problem carries (docs/execution.md).
     ``graph``: a preferences problem's explored graph (``solve(..., keep_graph=True).graph``),
-    relabelled when a ``{"profile": NAME}`` line comes (C11)."""
+    relabelled when a ``{"profile": NAME}`` line comes (C11); ``relabel`` False: replans keep
+    no graph either, and a profile line is refused."""
     session = Session(ex, emit, replan=replan, save=save, timeout=timeout,
-                      max_memory=max_memory, graph=graph,
+                      max_memory=max_memory, graph=graph, relabel=relabel,
                       timing={"decision_timeout": decision_timeout,
                               "recognition_latency": recognition_latency})
     try:
