@@ -16,9 +16,10 @@ from ehatp.experiments import randomgen
 from ehatp.model.grounding import ground_problem
 from ehatp.model.problem import Problem
 from ehatp.run.walk import walk_policy
-from ehatp.search import andor
+from ehatp.search import andor, values
 from ehatp.search.andor import search
-from ehatp.search.graph import EXPANDED, move_key
+from ehatp.search.graph import EXPANDED, GOAL, move_key
+from ehatp.search.values import LiveWorst, compute_values, knuth
 
 from .conftest import EXAMPLES_DIR
 
@@ -125,3 +126,44 @@ def test_the_search_reading_moves_off_a_twin_builds_the_same_graph_and_policy(
         assert walked.ok, str(walked)
     if name in ("p1", "p2", "p6"):
         assert reused[0] > 0  # the twins are there: the reading is exercised
+
+
+@pytest.mark.parametrize("name,problem", _problems(), ids=lambda x: x if isinstance(x, str)
+                         else "")
+def test_the_values_kept_during_the_search_give_knuths_values_and_order(
+        name: str, problem: Problem) -> None:
+    """§7: the worst-case values the search keeps up to date, and the order read off them
+    when every edge costs more than 0 (by value, ties by node id), are what Knuth's pass
+    computes on the final graph -- values and finalisation order alike, so the choices made
+    from them are the same."""
+    grounded = ground_problem(problem)
+    for max_states in (200, 3000):
+        out = search(grounded, symmetry=False, max_states=max_states)
+        gr = out.graph
+        if not gr.solved[out.root]:
+            continue
+        assert LiveWorst(gr).final() == knuth(gr)
+        if out.values is not None:  # the search's, from the values it kept
+            afresh = compute_values(gr, out.root)
+            assert (out.values.worst, out.values.value, out.values.choice) == (
+                afresh.worst, afresh.value, afresh.choice)
+
+
+def test_knuths_order_is_by_value_then_id_when_every_move_costs_something(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """By hand, P1 (cubes; every move costs 1): the goals are finalised first, by id, then
+    each value in turn; the order read off the kept values is the pass's own, and the pass is
+    not run for it."""
+    gr = search(ground_problem(ehatp.load(EXAMPLES_DIR / "cubes" / "p1.toml")),
+                symmetry=False).graph
+    live = LiveWorst(gr)
+    value, order = knuth(gr)
+    goals = [n for n in range(len(gr.states)) if gr.status[n] == GOAL]
+    assert order[:len(goals)] == goals and all(value[n] == 0 for n in goals)
+    assert [value[n] for n in order] == sorted(value[n] for n in order)
+
+    def no_pass(*args: object) -> None:
+        raise AssertionError("the pass was run")
+
+    monkeypatch.setattr(values, "knuth", no_pass)
+    assert live.final() == (value, order)

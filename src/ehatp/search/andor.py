@@ -291,7 +291,8 @@ class _Search:
         the depth limit (§6: a limit, not a proof that no policy exists), or unsolvable."""
         gr, root = self.graph, self.root
         if gr.solved[root]:
-            self.values = compute_values(gr, root, budget=self.budget)
+            self.values = compute_values(gr, root, budget=self.budget, live=self.live)
+            self.live = None
             self._stop(SolveStatus.SOLVED, optimal=self.values.exact)
         elif gr.depth_cut:
             self._stop(SolveStatus.DEPTH_LIMIT,
@@ -307,8 +308,8 @@ class _Search:
                            SolveStatus.MEMORY_LIMIT) and gr.solved[root]:
             self.values = compute_values(gr, root, budget=self.budget)  # not optimal
         elif self.status == SolveStatus.SOLVED and self.values is None:
-            self.live = None  # its arrays are not needed any more
-            self.values = compute_values(gr, root, budget=self.budget)
+            live, self.live = self.live, None  # its arrays are not needed any more
+            self.values = compute_values(gr, root, budget=self.budget, live=live)
 
 
 def _expand(gr: Graph, n: int, heap: list[Entry], stats: Stats, max_depth: int,

@@ -64,13 +64,14 @@ Vector = tuple[Cost, ...]
 
 
 def compute_values(gr: Graph, root: int, objective: Objective | None = None,
-                   budget: Budget | None = None) -> Values:
+                   budget: Budget | None = None, live: LiveWorst | None = None) -> Values:
     """§7: the values of ``gr`` under ``objective`` (default: the problem's) and the robot's
-    choice at every node of the chosen policy."""
+    choice at every node of the chosen policy. ``live``, the worst-case values the search kept
+    up to date on ``gr``, spares the worst-case pass where it can (:meth:`LiveWorst.final`)."""
     obj = gr.sem.grounded.problem.objective if objective is None else objective
     if budget is not None:
         budget.phase = "values (worst case)"
-    worst, order = knuth(gr, budget)
+    worst, order = knuth(gr, budget) if live is None else live.final(budget)
     n_nodes = len(worst)
     pos = [n_nodes] * n_nodes  # position in the Knuth order (n_nodes: never finalised)
     for i, n in enumerate(order):
@@ -223,6 +224,24 @@ class LiveWorst:
         v = self._eval(n)
         if v < value[n]:
             self._lower(n, v)
+
+    def final(self, budget: Budget | None = None) -> tuple[list[Cost | float], list[int]]:
+        """What :func:`knuth` returns on the graph now. When every edge costs more than 0,
+        read off the values kept: Knuth's algorithm then finalises the nodes in order of
+        value, ties by node id, so the order is a sort. Proof: a node of value ``v`` is
+        queued with ``v`` when the child its value comes from (a robot node's best option, a
+        human node's last child) is finalised, and that child's value is ``v`` less a
+        positive cost; nodes leave the queue by value, so every node of value ``v`` is queued
+        with ``v`` before the first of them leaves it, and they leave it by id. Otherwise (a
+        zero-cost ``silence`` or ``answer``, or values not kept incrementally), the pass
+        itself."""
+        gr, value = self.gr, self.value
+        if (not self.incremental or len(value) != len(gr.states)
+                or any(e.move.cost <= 0 for edges in gr.edges for e in edges)):
+            return knuth(gr, budget)
+        order = [n for n, v in enumerate(value) if v != INF]
+        order.sort(key=lambda n: (value[n], n))
+        return value, order
 
     def root_value(self, root: int) -> Cost | float:
         if not self.incremental:
