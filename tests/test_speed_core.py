@@ -14,6 +14,7 @@ from ehatp.epistemic.semantics import PASSIVE_CARRIED, Move, Semantics
 from ehatp.epistemic.state import EState
 from ehatp.experiments import randomgen
 from ehatp.model.grounding import ground_problem
+from ehatp.model.options import ObjectiveKind
 from ehatp.model.problem import Problem
 from ehatp.run.walk import walk_policy
 from ehatp.search import andor, values
@@ -167,3 +168,27 @@ def test_knuths_order_is_by_value_then_id_when_every_move_costs_something(
 
     monkeypatch.setattr(values, "knuth", no_pass)
     assert live.final() == (value, order)
+
+
+@pytest.mark.parametrize("name,problem", _problems(), ids=lambda x: x if isinstance(x, str)
+                         else "")
+def test_choosing_among_the_contenders_only_gives_the_choices_of_a_pass_over_every_node(
+        name: str, problem: Problem) -> None:
+    """§7, worst case: the robot's choices made over the nodes the root reaches through
+    human branches and options of the node's value (the only ones a choice can take, tie
+    keys apart) are those of the pass that visits every finalised node, and the totals they
+    rest on are the sub-policies' own (a robot node's value is its chosen option's)."""
+    grounded = ground_problem(problem)
+    if grounded.problem.objective.kind != ObjectiveKind.WORST_CASE:
+        pytest.skip("the contenders are the worst-case pass's")
+    for max_states in (200, 3000):
+        out = search(grounded, symmetry=False, max_states=max_states)
+        gr, obj = out.graph, grounded.problem.objective
+        worst, order = knuth(gr)
+        pos = [len(worst)] * len(worst)
+        for i, n in enumerate(order):
+            pos[n] = i
+        need_mean = "expected" in obj.ties
+        every, _ = values._choose(gr, order, lambda n, c, pos=pos: pos[c] < pos[n], obj,
+                                  need_mean)
+        assert compute_values(gr, out.root).choice == values._reachable(gr, out.root, every)

@@ -80,7 +80,8 @@ def compute_values(gr: Graph, root: int, objective: Objective | None = None,
     if obj.kind == ObjectiveKind.WORST_CASE:
         if budget is not None:
             budget.phase = "values (choices)"
-        choice, _ = _choose(gr, order, lambda n, c: pos[c] < pos[n], obj, need_mean, budget)
+        choice, _ = _choose(gr, _contenders(gr, root, worst, order, pos), lambda n, c:
+                            pos[c] < pos[n], obj, need_mean, budget)
         return Values(worst, _reachable(gr, root, choice), worst)
     if worst[root] == INF:
         return Values([INF] * n_nodes, {}, worst)
@@ -100,6 +101,32 @@ def compute_values(gr: Graph, root: int, objective: Objective | None = None,
         assert mc is not None
         value[n] = mc
     return Values(value, _reachable(gr, root, choice), worst, exact)
+
+
+def _contenders(gr: Graph, root: int, worst: list[Cost | float], order: list[int],
+                pos: list[int]) -> list[int]:
+    """§7, worst case: the nodes of ``order`` (Knuth's) whose choices the policy can depend
+    on, in that order: those the root reaches through every branch of a human node and, at a
+    robot node, the options that may be chosen -- to a child finalised before it, of the
+    node's value (an option of a greater value is never chosen, whatever the tie keys: they
+    only order options of equal value). The totals of a chosen sub-policy are its nodes' own,
+    so the choices of these nodes are what visiting every node of ``order`` gives."""
+    seen = bytearray(len(worst))
+    seen[root] = 1
+    stack = [root]
+    status, states, edges_of = gr.status, gr.states, gr.edges
+    while stack:
+        n = stack.pop()
+        if status[n] == GOAL:
+            continue
+        robot, v = states[n].turn == ROBOT, worst[n]
+        for e in edges_of[n]:
+            c = e.child
+            if c < 0 or seen[c] or robot and not (pos[c] < pos[n] and e.move.cost + worst[c] == v):
+                continue
+            seen[c] = 1
+            stack.append(c)
+    return [n for n in order if seen[n]]
 
 
 def _reachable(gr: Graph, root: int, choice: dict[int, int]) -> dict[int, int]:
