@@ -266,6 +266,8 @@ class LiveWorst:
         if (not self.incremental or len(value) != len(gr.states)
                 or any(e.move.cost <= 0 for edges in gr.edges for e in edges)):
             return knuth(gr, budget)
+        if budget is not None:
+            budget.check()  # the phase looks at the limits as it starts (a poll)
         order = [n for n, v in enumerate(value) if v != INF]  # by id
         order.sort(key=value.__getitem__)  # by value: a stable sort keeps ties by id
         return value, order
