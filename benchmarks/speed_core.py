@@ -3,12 +3,13 @@
     .venv/bin/python benchmarks/speed_core.py --versus DIR [--repeat N] [--only NAME ...]
         [--validate] [--keep DIR]
 
-Targets: ``cubes-c8-b2-opaque-k2`` solved with ``--no-symmetry``, and the IPC 2020 HTN
-track's ``to-Woodworking`` (HDDL, the robot alone, as ``benchmarks/hddl_report.py`` imports it;
-needs unified-planning). Every run is a fresh process (``python -c``, the checkout's ``src``
-first on ``sys.path``): import, ground, solve, write the policy JSON, and with ``--validate``
-validate it too. ``DIR`` (another checkout, e.g. a ``git worktree`` of an older commit) and
-this one alternate run by run, so that a shared machine's drift falls on both alike.
+Targets: ``cubes-c8-b2-opaque-k2`` and ``cubes-c6-b3-opaque-k8`` solved with ``--no-symmetry``,
+and the IPC 2020 HTN track's ``to-Woodworking`` (HDDL, the robot alone, as
+``benchmarks/hddl_report.py`` imports it; needs unified-planning). Every run is a fresh process
+(``python -c``, the checkout's ``src`` first on ``sys.path``): import, ground, solve, write the
+policy JSON, and with ``--validate`` validate it too. ``DIR`` (another checkout, e.g. a ``git
+worktree`` of an older commit) and this one alternate run by run, so that a shared machine's
+drift falls on both alike.
 
 Prints, per target and checkout, the medians of the whole process's CPU time (user + system,
 start-up included) and its peak resident memory (``ru_maxrss`` of the child), the states,
@@ -65,6 +66,7 @@ print(json.dumps({"status": r.status, "distinct": r.stats.get("distinct"),
 """
 
 TARGETS = {"cubes-c8-b2-opaque-k2": "cubes-c8-b2-opaque-k2 --no-symmetry",
+           "cubes-c6-b3-opaque-k8": "cubes-c6-b3-opaque-k8 --no-symmetry",
            "woodworking": "IPC 2020 to-Woodworking, the robot alone"}
 
 
@@ -93,7 +95,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeat", "-n", type=int, default=3, metavar="N",
                     help="runs per target and checkout; medians (default 3)")
     ap.add_argument("--only", action="append", choices=sorted(TARGETS), metavar="NAME",
-                    help=f"one of {', '.join(TARGETS)} (repeatable; default both)")
+                    help=f"one of {', '.join(TARGETS)} (repeatable; default all)")
     ap.add_argument("--validate", action="store_true", help="validate each policy too")
     ap.add_argument("--keep", type=Path, metavar="DIR", help="write the policies there")
     args = ap.parse_args(argv)

@@ -93,6 +93,8 @@ def check_concurrent(grounded: Grounded) -> None:
 class ConcurrentSemantics(Semantics):
     """The rules C1-C12 of docs/concurrent.md (``first = "human"``: the compliant robot)."""
 
+    passive_carried = False  # a step's reply node keeps the count (C4): not §4's table
+
     def __init__(self, grounded: Grounded) -> None:
         check_concurrent(grounded)
         super().__init__(grounded)

@@ -31,6 +31,15 @@ BLOCKED, HORIZON = -2, -3  # ends of a human plan other than FINISH (relevance "
 NOT_DONE = -4  # what a world whose robot agenda is blocked lets the human expect (§5)
 ASK_INTENTION = "ask(intention)"
 DEAD_PASSIVE_RUN = 3
+PRODUCT_CACHE = 1 << 20
+"""How many worlds the products :meth:`Semantics.product` remembers hold before it starts
+afresh."""
+PASSIVE_CARRIED = {WAIT: 1, PASS: 1, SILENCE: 0, ANSWER: 0}
+"""§3-§5 (turn-taking): how a move's child counts consecutive passive moves from its parent's
+count ``p``: ``p + 1`` after ``wait`` or ``pass`` (said with an ``inform`` too), ``p`` after the
+opening's ``silence`` or an ``answer``, 0 after any other move. No rule reads the count but the
+dead end of §6, so a node's moves are those of the same node with count 0, each carrying child's
+count raised by ``p`` (:attr:`Semantics.passive_carried`)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -76,6 +85,9 @@ def bits_of(mask: int) -> list[int]:
 class Semantics:
     """The transition rules (docs/semantics.md §2-§6) over one ground problem."""
 
+    passive_carried = True
+    """Whether the moves follow :data:`PASSIVE_CARRIED` (turn-taking: they do)."""
+
     def __init__(self, grounded: Grounded) -> None:
         self.grounded = grounded
         p = grounded.problem
@@ -94,6 +106,8 @@ class Semantics:
         self._vis: dict[int, int] = {}
         self._cop: dict[int, bool] = {}
         self._succ: dict[World, tuple[World, ...]] = {}
+        self._product: dict[Worlds, Worlds] = {}
+        self._product_size = 0
         self._knows: dict[int, bool] = {}  # task -> whether M_R^H knows it (attributed)
         self._rops: dict[int, GOp] = {}  # robot actions met, as M_R and M_R^H have them
         self._seen_ops: dict[int, GOp] = {}
@@ -317,10 +331,20 @@ class Semantics:
 
     def product(self, worlds: Worlds) -> Worlds:
         """§4: every world followed by the noop or an event the human anticipates of the
-        robot; a non-anticipating human imagines nothing (``W`` unchanged)."""
+        robot; a non-anticipating human imagines nothing (``W`` unchanged). It reads ``W``
+        alone: remembered per ``W`` (many true states share one), up to
+        :data:`PRODUCT_CACHE` worlds held, then afresh."""
         if not self.human_model.anticipates:
             return worlds
-        return normalize(x for w in worlds for x in self.successors(w))
+        r = self._product.get(worlds)
+        if r is None:
+            r = normalize(x for w in worlds for x in self.successors(w))
+            self._product_size += len(r)
+            if self._product_size > PRODUCT_CACHE:
+                self._product.clear()
+                self._product_size = len(r)
+            self._product[worlds] = r
+        return r
 
     def sees_done(self, t: int, robot_agenda: Agenda, worlds: Worlds) -> Worlds:
         """§4: a non-anticipating human co-present with a robot whose agenda can finish under

@@ -41,8 +41,8 @@ import time
 from dataclasses import dataclass
 
 from ..epistemic.concurrent import semantics_for
-from ..epistemic.semantics import DEAD_PASSIVE_RUN
-from ..epistemic.state import EState
+from ..epistemic.semantics import DEAD_PASSIVE_RUN, PASSIVE_CARRIED, Move
+from ..epistemic.state import ROBOT, EState
 from ..errors import InputError
 from ..model.grounded import Grounded
 from ..model.options import ObjectiveKind
@@ -67,6 +67,8 @@ from .symmetry import SymSemantics, detect
 from .values import LiveWorst, Values, compute_values
 
 Entry = tuple[Bound, Cost, int]  # the queue's: (f, g, node id)
+PASSIVE_FIELD = EState._fields.index("passive")
+_make = tuple.__new__  # an EState from a tuple of its fields, as NamedTuple._make does
 
 
 @dataclass
@@ -289,7 +291,8 @@ class _Search:
         the depth limit (§6: a limit, not a proof that no policy exists), or unsolvable."""
         gr, root = self.graph, self.root
         if gr.solved[root]:
-            self.values = compute_values(gr, root, budget=self.budget)
+            self.values = compute_values(gr, root, budget=self.budget, live=self.live)
+            self.live = None
             self._stop(SolveStatus.SOLVED, optimal=self.values.exact)
         elif gr.depth_cut:
             self._stop(SolveStatus.DEPTH_LIMIT,
@@ -305,8 +308,8 @@ class _Search:
                            SolveStatus.MEMORY_LIMIT) and gr.solved[root]:
             self.values = compute_values(gr, root, budget=self.budget)  # not optimal
         elif self.status == SolveStatus.SOLVED and self.values is None:
-            self.live = None  # its arrays are not needed any more
-            self.values = compute_values(gr, root, budget=self.budget)
+            live, self.live = self.live, None  # its arrays are not needed any more
+            self.values = compute_values(gr, root, budget=self.budget, live=live)
 
 
 def _expand(gr: Graph, n: int, heap: list[Entry], stats: Stats, max_depth: int,
@@ -318,7 +321,10 @@ def _expand(gr: Graph, n: int, heap: list[Entry], stats: Stats, max_depth: int,
     sem = gr.sem
     es = gr.states[n]
     stats.expanded += 1
-    if sem.is_goal(es):
+    # the same state with another passive count, expanded already: not a goal either (§6
+    # reads no count), and its moves are this node's (§4, PASSIVE_CARRIED)
+    twin = _twin(gr, es) if gr.sym is None and sem.passive_carried else -1
+    if twin < 0 and sem.is_goal(es):
         gr.status[n] = GOAL
         _mark_solved(gr, n)
         return
@@ -329,47 +335,93 @@ def _expand(gr: Graph, n: int, heap: list[Entry], stats: Stats, max_depth: int,
         gr.status[n], gr.dead_why[n] = DEAD, f"depth limit {max_depth} reached"
         gr.depth_cut.add(n)
         return
-    moves = sorted(sem.moves(es), key=move_key)
+    pairs = (_reused(gr, twin, es.passive) if twin >= 0 else
+             [(move, move.child, -1) for move in sorted(sem.moves(es), key=move_key)])
     g0, d0 = gr.g[n], gr.depth[n] + 1
-    index, gs, status, states = gr.index, gr.g, gr.status, gr.states
+    index, gs, status, states, depth = gr.index, gr.g, gr.status, gr.states, gr.depth
     heappush = heapq.heappush
     sym = gr.sym
     edges: list[Edge] = []
-    for move in moves:
-        child = move.child
+    generated = solved = 0  # children generated; edges to a child solved already
+    for move, child, c in pairs:
         if child is None:
             edges.append(Edge(gr.descriptor(move, -1), -1))
             continue
-        stats.generated += 1
-        pid = 0
-        if sym is not None:
-            child, pid = sym.canon(child)
-        c = index.get(child)
+        generated += 1
         g1 = g0 + move.cost
-        if c is None:
-            if max_states is not None and stats.distinct >= max_states:
-                stats.expanded -= 1
-                return
-            c = gr.add(child, g1, d0, n)
-            stats.distinct += 1
-            if len(child.worlds) > stats.max_worlds:
-                stats.max_worlds = len(child.worlds)
-            heappush(heap, (g1 if hfn is None else g1 + hfn(child), g1, c))
-        else:
-            if g1 < gs[c] and status[c] == OPEN:
-                gs[c] = g1
-                heappush(heap, (g1 if hfn is None else g1 + hfn(states[c]), g1, c))
-            if d0 < gr.depth[c]:
-                _lower_depth(gr, c, d0, heap, max_depth, hfn)
-            gr.add_parent(c, n)
-        edges.append(Edge(gr.descriptor(move, c), c, pid))
+        pid = 0
+        if c < 0:
+            if sym is not None:
+                child, pid = sym.canon(child)
+            c = index.get(child, -1)
+            if c < 0:
+                if max_states is not None and stats.distinct >= max_states:
+                    stats.expanded -= 1
+                    stats.generated += generated
+                    return
+                c = gr.add(child, g1, d0, n)
+                stats.distinct += 1
+                if len(child.worlds) > stats.max_worlds:
+                    stats.max_worlds = len(child.worlds)
+                heappush(heap, (g1 if hfn is None else g1 + hfn(child), g1, c))
+                edges.append(Edge(gr.descriptor(move, c), c, pid))
+                continue
+            move = gr.descriptor(move, c)
+        # else: a child read off another node's edge, the same node with the same move
+        if g1 < gs[c] and status[c] == OPEN:
+            gs[c] = g1
+            heappush(heap, (g1 if hfn is None else g1 + hfn(states[c]), g1, c))
+        if d0 < depth[c]:
+            _lower_depth(gr, c, d0, heap, max_depth, hfn)
+        gr.add_parent(c, n)
+        solved += gr.solved[c]
+        edges.append(Edge(move, c, pid))
+    stats.generated += generated
     gr.edges[n] = tuple(edges)
-    gr.status[n] = EXPANDED
-    if not gr.is_robot(n):
+    status[n] = EXPANDED
+    if es.turn != ROBOT:
         gr.pending[n] = len(edges) + (1 if not edges else 0)
-    for e in edges:
-        if e.child >= 0 and gr.solved[e.child]:
-            _child_solved(gr, n)
+    for _ in range(solved):
+        _child_solved(gr, n)
+
+
+def _twin(gr: Graph, es: EState) -> int:
+    """Return an expanded node whose state is ``es`` with another count of consecutive passive
+    moves (the least count first), or -1 when there is none."""
+    p, index, status = es.passive, gr.index, gr.status
+    # the same state with another count, as a plain tuple (equal to the EState, same hash)
+    head, tail = es[:PASSIVE_FIELD], es[PASSIVE_FIELD + 1:]
+    for q in range(DEAD_PASSIVE_RUN):
+        if q != p:
+            twin = index.get(head + (q,) + tail)  # type: ignore[call-overload]
+            if twin is not None and status[twin] == EXPANDED:
+                return int(twin)
+    return -1
+
+
+def _reused(gr: Graph, twin: int, p: int) -> list[tuple[Move, EState | None, int]]:
+    """§3-§5: the moves of a node with ``p`` consecutive passive moves read off the expanded
+    node ``twin`` whose state differs from its by that count only: the same moves in the same
+    order, each child the same node, but for a move that carries the count
+    (:data:`~ehatp.epistemic.semantics.PASSIVE_CARRIED`), whose child has the count ``p`` plus
+    the move's. As ``(move, child state, child id)``; the id is -1 where the child is to be
+    looked up. (The moves are in the canonical order, ties by child state: a carrying move's
+    label is its node's alone, so the order is the same.)"""
+    states = gr.states
+    out: list[tuple[Move, EState | None, int]] = []
+    for e in gr.edges[twin]:
+        c = e.child
+        if c < 0:
+            out.append((e.move, None, -1))
+            continue
+        d = PASSIVE_CARRIED.get(e.move.kind)
+        if d is None:
+            out.append((e.move, states[c], c))
+        else:
+            cs = states[c]
+            out.append((e.move, _make(EState, cs[:PASSIVE_FIELD] + (p + d,)
+                                      + cs[PASSIVE_FIELD + 1:]), -1))
+    return out
 
 
 def _lower_depth(gr: Graph, c: int, d: int, heap: list[Entry], max_depth: int,

@@ -59,6 +59,8 @@ class Edge:
 
 
 NO_EDGES: tuple[Edge, ...] = ()
+_make = tuple.__new__  # an EState from a tuple of its fields, as NamedTuple._make does
+assert EState._fields[1:5] == ("true", "robot_agenda", "human_agendas", "worlds")
 
 
 class Graph:
@@ -93,8 +95,8 @@ class Graph:
         ones), reached at path cost ``g`` and ``depth`` moves."""
         w = self._worlds.setdefault(es.worlds, es.worlds)
         t = self._trues.setdefault(es.true, es.true)
-        if w is not es.worlds or t is not es.true:
-            es = es._replace(true=t, worlds=w)
+        if w is not es.worlds or t is not es.true:  # what _replace does, without its keywords
+            es = _make(EState, (es[0], t, es[2], es[3], w, *es[5:]))
         i = len(self.states)
         self.states.append(es)
         self.index[es] = i

@@ -64,13 +64,14 @@ Vector = tuple[Cost, ...]
 
 
 def compute_values(gr: Graph, root: int, objective: Objective | None = None,
-                   budget: Budget | None = None) -> Values:
+                   budget: Budget | None = None, live: LiveWorst | None = None) -> Values:
     """§7: the values of ``gr`` under ``objective`` (default: the problem's) and the robot's
-    choice at every node of the chosen policy."""
+    choice at every node of the chosen policy. ``live``, the worst-case values the search kept
+    up to date on ``gr``, spares the worst-case pass where it can (:meth:`LiveWorst.final`)."""
     obj = gr.sem.grounded.problem.objective if objective is None else objective
     if budget is not None:
         budget.phase = "values (worst case)"
-    worst, order = knuth(gr, budget)
+    worst, order = knuth(gr, budget) if live is None else live.final(budget)
     n_nodes = len(worst)
     pos = [n_nodes] * n_nodes  # position in the Knuth order (n_nodes: never finalised)
     for i, n in enumerate(order):
@@ -79,7 +80,8 @@ def compute_values(gr: Graph, root: int, objective: Objective | None = None,
     if obj.kind == ObjectiveKind.WORST_CASE:
         if budget is not None:
             budget.phase = "values (choices)"
-        choice, _ = _choose(gr, order, lambda n, c: pos[c] < pos[n], obj, need_mean, budget)
+        choice, _ = _choose(gr, _contenders(gr, root, worst, order, pos), lambda n, c:
+                            pos[c] < pos[n], obj, need_mean, budget)
         return Values(worst, _reachable(gr, root, choice), worst)
     if worst[root] == INF:
         return Values([INF] * n_nodes, {}, worst)
@@ -99,6 +101,32 @@ def compute_values(gr: Graph, root: int, objective: Objective | None = None,
         assert mc is not None
         value[n] = mc
     return Values(value, _reachable(gr, root, choice), worst, exact)
+
+
+def _contenders(gr: Graph, root: int, worst: list[Cost | float], order: list[int],
+                pos: list[int]) -> list[int]:
+    """§7, worst case: the nodes of ``order`` (Knuth's) whose choices the policy can depend
+    on, in that order: those the root reaches through every branch of a human node and, at a
+    robot node, the options that may be chosen -- to a child finalised before it, of the
+    node's value (an option of a greater value is never chosen, whatever the tie keys: they
+    only order options of equal value). The totals of a chosen sub-policy are its nodes' own,
+    so the choices of these nodes are what visiting every node of ``order`` gives."""
+    seen = bytearray(len(worst))
+    seen[root] = 1
+    stack = [root]
+    status, states, edges_of = gr.status, gr.states, gr.edges
+    while stack:
+        n = stack.pop()
+        if status[n] == GOAL:
+            continue
+        robot, v = states[n].turn == ROBOT, worst[n]
+        for e in edges_of[n]:
+            c = e.child
+            if c < 0 or seen[c] or robot and not (pos[c] < pos[n] and e.move.cost + worst[c] == v):
+                continue
+            seen[c] = 1
+            stack.append(c)
+    return [n for n in order if seen[n]]
 
 
 def _reachable(gr: Graph, root: int, choice: dict[int, int]) -> dict[int, int]:
@@ -223,6 +251,26 @@ class LiveWorst:
         v = self._eval(n)
         if v < value[n]:
             self._lower(n, v)
+
+    def final(self, budget: Budget | None = None) -> tuple[list[Cost | float], list[int]]:
+        """What :func:`knuth` returns on the graph now. When every edge costs more than 0,
+        read off the values kept: Knuth's algorithm then finalises the nodes in order of
+        value, ties by node id, so the order is a sort. Proof: a node of value ``v`` is
+        queued with ``v`` when the child its value comes from (a robot node's best option, a
+        human node's last child) is finalised, and that child's value is ``v`` less a
+        positive cost; nodes leave the queue by value, so every node of value ``v`` is queued
+        with ``v`` before the first of them leaves it, and they leave it by id. Otherwise (a
+        zero-cost ``silence`` or ``answer``, or values not kept incrementally), the pass
+        itself."""
+        gr, value = self.gr, self.value
+        if (not self.incremental or len(value) != len(gr.states)
+                or any(e.move.cost <= 0 for edges in gr.edges for e in edges)):
+            return knuth(gr, budget)
+        if budget is not None:
+            budget.check()  # the phase looks at the limits as it starts (a poll)
+        order = [n for n, v in enumerate(value) if v != INF]  # by id
+        order.sort(key=value.__getitem__)  # by value: a stable sort keeps ties by id
+        return value, order
 
     def root_value(self, root: int) -> Cost | float:
         if not self.incremental:
