@@ -51,9 +51,9 @@ from ..errors import (
 )
 from ..formats.lifted import Perm, Renamings
 from ..formats.policy import Policy, PolicyMove, PolicyNode, label_key
+from ..model.agenda import Agenda
 from ..model.formula import conj
 from ..model.grounding import Grounded, ground_problem
-from ..model.htn import Agenda
 from ..model.problem import Cost, Problem
 from ..model.vocabulary import HUMAN, ROBOT
 
