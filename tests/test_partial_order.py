@@ -13,8 +13,8 @@ import ehatp
 from ehatp import HIDDEN, INFERABLE, Domain, DomainError, HumanModel, Var, observable
 from ehatp.check import validator as V
 from ehatp.epistemic.semantics import Semantics
+from ehatp.model.agenda import Block, Networks
 from ehatp.model.grounding import FINISH, ground_problem
-from ehatp.model.htn import Block, Networks
 
 from .scenarios import labels, problem, walk
 

@@ -16,10 +16,11 @@ from ehatp import Domain, Var
 from ehatp.check.rules import Rules
 from ehatp.epistemic.semantics import Semantics
 from ehatp.errors import DomainError
+from ehatp.model.agenda import Block
 from ehatp.model.formula import FALSE, TRUE, And, Formula, GAtom, compile_ground
 from ehatp.model.grounded import FINISH, GMethod, GModel, GOp
 from ehatp.model.grounding import ground_problem
-from ehatp.model.htn import Block, Option, Refiner
+from ehatp.model.htn import Option, Refiner
 
 from .scenarios import problem as scen_problem
 

@@ -19,7 +19,7 @@ from typer.testing import CliRunner
 
 import ehatp
 from ehatp.cli.app import app
-from ehatp.experiments import sweep
+from ehatp.experiments import pools, sweep
 from ehatp.experiments.examples import examples_dir
 from ehatp.formats.policy import Policy, num
 from ehatp.formats.problem_toml import load
@@ -109,6 +109,17 @@ def local_rows(problems: Path, grid: Path, tmp_path: Path) -> list[dict[str, Any
 
 
 # --- the grid and the overrides hook ---------------------------------------------------------
+
+
+def test_the_pools_are_still_importable_from_the_sweep_module() -> None:
+    """CHANGELOG.md names ``Pool``, ``sigterm_as_interrupt`` and the pools in
+    ``ehatp.experiments.sweep``; they live in ``ehatp.experiments.pools`` now and the old
+    names are the same objects."""
+    for name in ("DaskPool", "ExecutorFailed", "ExecutorKind", "LocalPool", "Pool", "RayPool",
+                 "WorkerLost", "default_workers", "open_pool", "run_tasks",
+                 "sigterm_as_interrupt"):
+        assert getattr(sweep, name) is getattr(pools, name), name
+        assert name in sweep.__all__
 
 
 def test_grid_is_a_cartesian_product(tmp_path: Path) -> None:
@@ -267,9 +278,9 @@ def test_a_runaway_worker_is_ended_and_reported(problems: Path, tmp_path: Path) 
     tasks = sweep.make_tasks(sweep.find_problems([str(problems / "*.toml")]), None,
                              sweep.Settings(timeout=1, kill_after=2, marks=marks))
     rows: list[dict[str, Any]] = []
-    pool = sweep.LocalPool(2)
+    pool = pools.LocalPool(2)
     try:
-        sweep.run_tasks(tasks, pool, rows.append)
+        pools.run_tasks(tasks, pool, rows.append)
     finally:
         pool.close()
     by_name = {Path(r["instance"]).name: r for r in rows}

@@ -22,7 +22,7 @@ from typing import Any
 
 import pytest
 
-from ehatp.experiments import sweep
+from ehatp.experiments import pools, sweep
 from ehatp.experiments.examples import examples_dir
 
 pytestmark = pytest.mark.skipif(not Path("/proc/self/stat").exists(),
@@ -205,7 +205,7 @@ def test_a_worker_ends_when_its_driver_is_killed(tmp_path: Path, method: str,
 
 def test_sigterm_raises_keyboard_interrupt_inside_the_block_only() -> None:
     before = signal.getsignal(signal.SIGTERM)
-    with pytest.raises(KeyboardInterrupt), sweep.sigterm_as_interrupt():
+    with pytest.raises(KeyboardInterrupt), pools.sigterm_as_interrupt():
         os.kill(os.getpid(), signal.SIGTERM)
         time.sleep(5)  # the handler interrupts this
     assert signal.getsignal(signal.SIGTERM) == before
@@ -239,6 +239,6 @@ def test_an_interrupted_run_emits_the_rows_already_finished_and_aborts_the_pool(
 
     tasks = [sweep.Task(key=k, instance="p.toml", path="/p.toml", text="") for k in "abc"]
     with pytest.raises(KeyboardInterrupt):
-        sweep.run_tasks(tasks, pool, emit)
+        pools.run_tasks(tasks, pool, emit)
     assert sorted(r["key"] for r in rows) == ["a", "b"]  # both had finished; c never ran
     assert pool.aborted

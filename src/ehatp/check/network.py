@@ -3,7 +3,7 @@ order"): a :class:`Block` of tasks with an order between some of them, kept in o
 form so that equal task networks are equal blocks, and written as the policy file does.
 
 Part of the independent validator (:mod:`ehatp.check`): written from the document, with plain
-sets of position pairs, not from the planner's bitmask networks (:mod:`ehatp.model.htn`).
+sets of position pairs, not from the planner's bitmask networks (:mod:`ehatp.model.agenda`).
 """
 
 from __future__ import annotations

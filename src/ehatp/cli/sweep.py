@@ -15,27 +15,28 @@ import typer
 from rich.console import Console
 
 from ..errors import InputError, printable
-from ..experiments.sweep import (
+from ..experiments.pools import (
     ExecutorFailed,
     ExecutorKind,
+    default_workers,
+    open_pool,
+    run_tasks,
+)
+from ..experiments.sweep import (
     Grid,
-    Row,
     Settings,
     check_grid,
-    default_workers,
     find_problems,
     make_tasks,
-    open_pool,
     overrides_text,
     plot,
     read_grid,
     read_rows,
     row_line,
-    run_tasks,
     summary_table,
     write_csv,
 )
-from ..experiments.sweep_worker import Task
+from ..experiments.sweep_worker import Row, Task
 from .common import EXIT_NO_POLICY, EXIT_OK, command_app, die, user_errors
 
 EXIT_INTERRUPTED = 130

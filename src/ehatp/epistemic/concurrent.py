@@ -32,9 +32,9 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from ..errors import InputError
+from ..model.agenda import Agenda
 from ..model.formula import Formula, Var
 from ..model.grounded import FINISH, GOp, Grounded
-from ..model.htn import Agenda
 from ..model.options import (
     Commute,
     InformWhere,

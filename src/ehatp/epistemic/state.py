@@ -14,7 +14,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import NamedTuple
 
-from ..model.htn import Agenda
+from ..model.agenda import Agenda
 from ..model.vocabulary import HUMAN, ROBOT, Agent
 
 World = tuple[int, Agenda]

@@ -53,6 +53,8 @@ from ..search.planner import solve
 ROW_KEYS = ("key", "instance", "overrides", "problem", "status", "optimal", "cost", "worst_case",
             "expected", "communications", "leaves", "stats", "valid", "validation", "policy",
             "reason", "error", "error_kind", "time_s", "search_ms", "version")
+Row = dict[str, Any]
+"""A result row: one instance's outcome, its keys in :data:`ROW_KEYS` order."""
 # statistics that describe the policy go to their own columns, times to time_s / search_ms
 _POLICY_STATS = ("cost", "worst_case", "expected", "communications", "leaves")
 _TIME_STATS = ("time_ms",)

@@ -48,7 +48,8 @@ from ..model.options import StepFirst
 from ..model.problem import Problem, call_str
 from ..model.vocabulary import HUMAN
 from ..run.execute import beliefs
-from ..run.executor import Executor, Step
+from ..run.executor import Executor
+from ..run.step import Step
 from .views import Perspective, Scene, Unsure, ViewHook, check_scene, predicate_of
 
 LOG_TAIL = 200  # the records an experimenter view carries

@@ -21,27 +21,19 @@ semantics' own (the move with the renamed child, preferably the renamed label).
 When the human leaves the policy, :meth:`Executor.as_problem` states the execution so far as a new
 problem and :meth:`Executor.replan` plans from where the robot is and follows the new policy. See
 ``docs/simulation.md`` and ``docs/execution.md``.
+
+What the executor records is :mod:`ehatp.run.step` (:class:`Action`, :class:`Step`); what a step
+changed and what each agent believes, in words for people, is :mod:`ehatp.run.narrative`.
 """
 
 from __future__ import annotations
 
 import copy
 import dataclasses
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from ..epistemic.concurrent import ConcurrentSemantics
-from ..epistemic.semantics import (
-    ACTION,
-    ANNOUNCE,
-    ANSWER,
-    ASK,
-    INFORM,
-    WAIT,
-    Move,
-    Semantics,
-    bits_of,
-)
+from ..epistemic.semantics import ACTION, WAIT, Move, Semantics
 from ..epistemic.state import EState, Worlds, states_of
 from ..errors import (
     ExecutionError,
@@ -51,73 +43,17 @@ from ..errors import (
 )
 from ..formats.lifted import Perm, Renamings
 from ..formats.policy import Policy, PolicyMove, PolicyNode, label_key
+from ..model.agenda import Agenda
 from ..model.formula import conj
 from ..model.grounding import Grounded, ground_problem
-from ..model.htn import Agenda
 from ..model.problem import Cost, Problem
 from ..model.vocabulary import HUMAN, ROBOT
+from . import narrative
+from .narrative import WorldView, human_agendas
+from .step import Action, Step
 
 if TYPE_CHECKING:
     from ..search.planner import Relabeler, Result
-
-MAX_WORLDS_LISTED = 8
-
-
-@dataclass(frozen=True)
-class Action:
-    """One move in the domain's vocabulary. ``name``/``args`` split an operator call
-    (``place``, ``("w", "box2")``); for ``inform`` the args are the literals told, for ``ask``
-    the question; ``wait`` and ``pass`` have none. ``told`` holds the literals the robot says
-    while doing an action or a wait (``speech = "with-action"``: ``inform(x) + place(r, b)``)."""
-
-    agent: str
-    kind: str  # action | wait | pass | inform | ask | silence | answer | announce
-    label: str
-    name: str
-    args: tuple[str, ...]
-    cost: Cost
-    told: tuple[str, ...] = ()
-
-
-@dataclass(frozen=True)
-class WorldView:
-    """One world the human entertains: its true atoms, how it differs from the truth, and the
-    agenda the human attributes to the robot there."""
-
-    atoms: tuple[str, ...]
-    true: tuple[str, ...]  # true here, false in reality
-    false: tuple[str, ...]  # false here, true in reality
-    robot_agenda: tuple[str, ...]
-
-    @property
-    def is_truth(self) -> bool:
-        return not self.true and not self.false
-
-
-@dataclass(frozen=True)
-class Step:
-    """One executed move: the states around it and the policy node it reached (None within
-    the opening). ``assessed`` holds the human's worlds just before situation assessment, when
-    it ran on this step. ``replanned`` marks a human move the policy did not cover, after which
-    the execution follows a new policy (:meth:`Executor.replan`); ``node`` is that policy's
-    root. ``trace`` is the move as a problem's fixed opening names it, when that is not its
-    label: ``fetch [shelve]`` where robot moves share a label (:meth:`Semantics.trace_label`,
-    read back by :meth:`Executor.as_problem`'s problem)."""
-
-    index: int
-    action: Action
-    before: EState
-    after: EState
-    node: PolicyNode | None
-    opening: bool
-    assessed: Worlds | None
-    replanned: bool = False
-    trace: str = ""
-
-    @property
-    def played(self) -> str:
-        """The step as an opening step (``[problem] after``): the agent, then the move."""
-        return f"{self.action.agent} {self.trace or self.action.label}"
 
 
 class _TracingSemantics(Semantics):
@@ -142,12 +78,6 @@ class _TracingJoint(ConcurrentSemantics, _TracingSemantics):
 def _tracing(g: Grounded) -> _TracingSemantics:
     """Return the problem's semantics (turns, or joint steps) with assessment traced."""
     return _TracingJoint(g) if g.problem.steps.concurrent else _TracingSemantics(g)
-
-
-def human_agendas(es: EState) -> tuple[Agenda, ...]:
-    """Return the human agendas the robot cannot tell apart at ``es`` (docs/semantics.md §3,
-    "What the robot observes"): the one place the executor reads them."""
-    return es.human_agendas
 
 
 class Executor:
@@ -444,21 +374,14 @@ class Executor:
         self.problem, self.node = problem, root
         return policy
 
-    # -- what the human believes ------------------------------------------------------------------
+    # -- what the human believes, in words (run/narrative.py) -----------------------------------
     def human_worlds(self) -> list[WorldView]:
         """The worlds the human entertains now, in the domain's vocabulary."""
-        g, t = self.grounded, self.state.true
-        return [WorldView(tuple(g.state_atoms(s)), tuple(g.mask_atoms(s & ~t)),
-                          tuple(g.mask_atoms(t & ~s)), tuple(self._agenda(ag)))
-                for s, ag in self.state.worlds]
+        return narrative.world_views(self.sem, self.state)
 
     def uncertain_atoms(self) -> list[str]:
         """The atoms on which the human's worlds disagree."""
-        states = states_of(self.state.worlds)
-        m = 0
-        for s in states:
-            m |= s ^ states[0]
-        return self.grounded.mask_atoms(m)
+        return narrative.disputed_atoms(self.sem, self.state)
 
     def truth(self) -> list[str]:
         """The atoms true now (the robot knows them)."""
@@ -467,101 +390,15 @@ class Executor:
     def explain(self, step: Step) -> list[str]:
         """What ``step`` changed, in the domain's vocabulary: the truth, co-presence, and how the
         human's worlds were added, ruled out or told."""
-        g, sem = self.grounded, self.sem
-        R, H = self.robot_name, self.human_name
-        b, a, act = step.before, step.after, step.action
-        lines: list[str] = []
-        gained, lost = g.mask_atoms(a.true & ~b.true), g.mask_atoms(b.true & ~a.true)
-        if gained or lost:
-            parts = ([f"now true: {', '.join(gained)}"] if gained else []) + (
-                [f"no longer true: {', '.join(lost)}"] if lost else [])
-            lines.append("; ".join(parts))
-        n0 = len(b.worlds)
-        mid = step.assessed if step.assessed is not None else a.worlds
-        cop = sem.copresent(b.true)
-        if act.agent == R and act.kind in (ACTION, WAIT) and not cop:
-            if act.kind == ACTION or b.k < sem.K:
-                lines.append(f"{H} did not see it: imagining what {R} may have done meanwhile, "
-                             f"{H} goes from {n0} to {_worlds(len(mid))}")
-            else:
-                lines.append(f"{H} did not see it and imagines nothing more "
-                             f"({R} has had its K={sem.K} unseen turns)")
-        elif act.agent == R and act.kind == ACTION and len(mid) != n0:
-            lines.append(f"{H} saw it: {n0} -> {_worlds(len(mid))}")
-        elif act.kind == INFORM:
-            lines.append(f"{R} tells {H}: {', '.join(act.args)} ({n0} -> {_worlds(len(mid))})")
-        elif act.kind == ASK and act.agent == R:
-            lines.append(f"{R} asks {H} what {H} is about to do")
-        elif act.kind == ANSWER:
-            lines.append(f"{H} answers {R}: " + (", ".join(self._agenda(human_agendas(a)[0]))
-                                                 or "nothing more to do")
-                         + f"; {R} now knows {H}'s intention")
-        elif act.kind == ANNOUNCE:
-            lines.append(f"{R} tells {H} what it is doing: "
-                         + (", ".join(self._agenda(b.robot_agenda)) or "nothing more")
-                         + f" ({n0} -> {_worlds(len(mid))})")
-        elif act.kind == ASK:
-            answer = self.answer(b, act.label)
-            said = "" if answer is None else f"; {R} answers {'yes' if answer else 'no'}"
-            lines.append(f"{H} asks whether {act.args[0]}{said} ({n0} -> {_worlds(len(mid))})")
-        if step.assessed is not None and step.assessed != a.worlds:
-            lines.append(self._assessment(a.true, step.assessed, a.worlds))
-        if sem.copresent(a.true) != cop:
-            lines.append(f"{H} and {R} are now " + ("together" if sem.copresent(a.true)
-                                                     else "apart"))
-        if not sem.copresent(a.true) and a.k != b.k:
-            lines.append(f"{R} has had {a.k} of its K={sem.K} turns unseen by {H}")
-        lines.extend(self.belief_lines(a))
-        return lines
+        return narrative.step_lines(self.sem, step, self.answer)
 
     def start_lines(self) -> list[str]:
         """The situation before the first move."""
-        es, sem = self.state, self.sem
-        R, H = self.robot_name, self.human_name
-        lines = [f"{H} and {R} are " + ("together" if sem.copresent(es.true) else "apart")]
-        if self.initial_assessed is not None and self.initial_assessed != es.worlds:
-            lines.append(self._assessment(es.true, self.initial_assessed, es.worlds))
-        return lines + self.belief_lines(es)
+        return narrative.start_lines(self.sem, self.state, self.initial_assessed)
 
     def belief_lines(self, es: EState | None = None) -> list[str]:
         """What each agent believes in ``es`` (default: now)."""
-        es = self.state if es is None else es
-        R, H = self.robot_name, self.human_name
-        hyps = human_agendas(es)
-        intentions = [] if len(hyps) < 2 else [  # what the robot cannot see (§3)
-            f"{R} cannot tell which of {len(hyps)} intentions {H} follows: "
-            + " / ".join(", ".join(self._agenda(h)) or "nothing" for h in hyps)]
-        return self._world_lines(es) + intentions
-
-    def _world_lines(self, es: EState) -> list[str]:
-        g, t = self.grounded, es.true
-        R, H = self.robot_name, self.human_name
-        ws = es.worlds
-        head = f"{R} knows the truth; {H} now entertains {_worlds(len(ws))}"
-        if len(ws) == 1 and ws[0][0] == t and ws[0][1] == es.robot_agenda:
-            return [head + ": the truth"]
-        states = states_of(ws)
-        m = 0
-        for s in states:
-            m |= s ^ states[0]
-        differ = g.mask_atoms(m)
-        if len({ag for _, ag in ws}) > 1:
-            differ.append(f"{R}'s agenda")
-        if differ:
-            head += f"; they differ on {', '.join(differ)}"
-        if all(s != t for s in states):
-            head += "; none of them is the truth"
-        lines = [head + ":"]
-        for i, (s, ag) in enumerate(ws[:MAX_WORLDS_LISTED], 1):
-            lits = g.mask_atoms(s & ~t) + [f"not {x}" for x in g.mask_atoms(t & ~s)]
-            text = f"differs from the truth: {', '.join(lits)}" if lits else "the true state"
-            if ag != es.robot_agenda:
-                text += f"; {H} thinks {R} still has to do: " + (
-                    ", ".join(self._agenda(ag)) or "nothing")
-            lines.append(f"  world {i}: {text}")
-        if len(ws) > MAX_WORLDS_LISTED:
-            lines.append(f"  ... and {len(ws) - MAX_WORLDS_LISTED} more")
-        return lines
+        return narrative.belief_lines(self.sem, self.state if es is None else es)
 
     # -- following the policy's edges ----------------------------------------------------------
     def edge_move(self, node: PolicyNode, edge: PolicyMove, es: EState | None = None) -> Move:
@@ -840,24 +677,7 @@ class Executor:
                         return bool(sem.g.compile(phi)(es.true))
         return None
 
-    def _assessment(self, t: int, pre: Worlds, post: Worlds) -> str:
-        g, H = self.grounded, self.human_name
-        vis = self.sem.visible(t)
-        removed = [w for w in pre if w not in post]
-        m = 0
-        for s, _ in removed:
-            m |= (s ^ t) & vis
-        seen = ", ".join(g.atoms[i] if t >> i & 1 else f"not {g.atoms[i]}" for i in bits_of(m))
-        if set(post) <= set(pre):
-            return (f"situation assessment: {H} sees {seen or 'the scene'}, which rules out "
-                    f"{_worlds(len(removed))} ({len(pre)} -> {len(post)})")
-        return (f"situation assessment: no world fits what {H} sees ({seen}); {H} revises its "
-                f"worlds ({len(pre)} -> {len(post)})")
 
-
-def _worlds(n: int) -> str:
-    return f"{n} world" + ("" if n == 1 else "s")
-
-
+# Action and Step live in .step, WorldView in .narrative: importable from here all the same
 __all__ = ["Action", "ExecutionError", "Executor", "PolicyMismatch", "Step",
-           "UncoveredHumanAction", "WorldView"]
+           "UncoveredHumanAction", "WorldView", "human_agendas"]

@@ -69,9 +69,9 @@ from collections.abc import Callable
 from fractions import Fraction
 
 from ..epistemic.state import ROBOT, EState
+from ..model.agenda import Agenda, Block
 from ..model.domain import AgentModel, Operator
 from ..model.grounded import Grounded
-from ..model.htn import Agenda, Block
 from ..model.problem import Cost
 
 INF = float("inf")
