@@ -3,7 +3,7 @@
     .venv/bin/python benchmarks/scaling.py [--max-size N] [--only PATTERN ...] [--big]
         [--no-symmetry] [--timeout S] [--max-memory SIZE] [--repeat N] [--json FILE]
         [--plot FILE.png] [--baseline FILE.json] [--src DIR] [--versus DIR]
-        [--report classes [--top N]]
+        [--report classes [--top N] [--every]]
 
 Same grid and table as ``ehatp bench scaling`` (``ehatp.experiments.bench``). ``--src DIR`` times
 another checkout's ``src`` directory with this checkout's grid (how docs/benchmarks.md measured
@@ -12,7 +12,8 @@ this checkout, run after run) so that a noisy machine's drift falls on both alik
 and plots the two side by side; ``--baseline FILE.json`` adds an earlier run's rows to the
 plot. ``--report classes`` solves each instance once (the search alone) and reports, for its
 ``--top N`` nodes with the most worlds, how many classes the human's worlds form under the
-swaps of objects that leave the node unchanged (``ehatp.experiments.classes``; issue 17 §2). Timing
+swaps of objects that leave the node unchanged (``ehatp.experiments.classes``; issue 17 §2);
+``--every`` also sums the worlds and the classes over every node of the search. Timing
 lives here and in that command, never in the unit tests.
 """
 
@@ -59,6 +60,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="classes: count the human's worlds as classes instead of timing")
     ap.add_argument("--top", type=int, default=5, metavar="N",
                     help="--report classes: the nodes with the most worlds counted (default 5)")
+    ap.add_argument("--every", action="store_true",
+                    help="--report classes: also sum worlds and classes over every node (slow)")
     args = ap.parse_args(argv)
     args.src = args.src or SRC
     if args.repeat < 1:
@@ -72,7 +75,7 @@ def main(argv: list[str] | None = None) -> int:
     if not points:
         ap.error("no grid instance selected")
     if args.report == "classes":
-        return report_classes(points, args.src, args.timeout, args.top, args.json)
+        return report_classes(points, args.src, args.timeout, args.top, args.every, args.json)
 
     def notify(p: bench.GridPoint, i: int, n: int, run: int) -> None:
         if sys.stderr.isatty():
@@ -117,13 +120,14 @@ _CLASSES_CHILD = r"""
 import dataclasses, json, sys
 import ehatp
 from ehatp.experiments.classes import count
-report = count(ehatp.load(sys.argv[1]), top=int(sys.argv[2]), timeout=float(sys.argv[3]))
+report = count(ehatp.load(sys.argv[1]), top=int(sys.argv[2]), timeout=float(sys.argv[3]),
+               every=sys.argv[4] == "every")
 print(json.dumps(dataclasses.asdict(report)))
 """
 
 
 def report_classes(points: list[bench.GridPoint], src: str, timeout: float, top: int,
-                   out: Path | None) -> int:
+                   every: bool, out: Path | None) -> int:
     """Print, per point, the classes of its ``top`` nodes with the most worlds (one fresh
     process each): ``|W| -> classes`` with the cells (sizes of the sets of objects whose
     swaps fix the node), and the time the count took beside the node's canonical form."""
@@ -141,8 +145,9 @@ def report_classes(points: list[bench.GridPoint], src: str, timeout: float, top:
             path = os.path.join(tmp, f"{p.name}.toml")
             Path(path).write_text(p.toml(), encoding="utf-8")
             proc = subprocess.run([sys.executable, "-c", _CLASSES_CHILD, path, str(top),
-                                   str(timeout)], capture_output=True, text=True, env=env,
-                                  timeout=timeout * 3 + 60)
+                                   str(timeout), "every" if every else "top"],
+                                  capture_output=True, text=True, env=env,
+                                  timeout=timeout * 3 + (600 if every else 60))
         if proc.returncode != 0 or not proc.stdout.strip():
             err = (proc.stderr.strip().splitlines() or [f"exit {proc.returncode}"])[-1]
             print(f"{p.name}: crashed ({err})")
@@ -156,6 +161,9 @@ def report_classes(points: list[bench.GridPoint], src: str, timeout: float, top:
             cells = ", ".join(str(c) for c in n["cells"])
             print(f"  {n['worlds']:>6,} -> {n['classes']:>5,}  ({n['worlds'] / n['classes']:.1f}x)"
                   f"  cells [{cells}]  count {n['count_ms']:.1f} ms, canon {n['canon_ms']:.1f} ms")
+        if row.get("total_worlds") is not None:
+            w, c = row["total_worlds"], row["total_classes"]
+            print(f"  every node: {w:,} worlds -> {c:,} classes ({w / max(c, 1):.1f}x)")
     if out is not None:
         out.write_text(json.dumps(rows, indent=1) + "\n", encoding="utf-8")
     return 1 if any(r["status"] == "crashed" for r in rows) else 0

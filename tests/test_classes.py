@@ -119,11 +119,13 @@ def test_the_union_find_counts_the_orbits_that_enumerating_the_group_finds() -> 
     for es in nodes:
         node_cells = cells(sym, es)
         assert orbits(sym, es, node_cells) == _brute_force_orbits(sym, es, node_cells)
-    report = count(p, top=3)
+    report = count(p, top=3, every=True)
     assert report.status == "solved" and len(report.nodes) == 3
     assert report.nodes[0].worlds == report.max_worlds
     assert all(1 <= n.classes <= n.worlds for n in report.nodes)
     assert report.nodes[0].classes < report.nodes[0].worlds
+    assert report.total_worlds is not None and report.total_classes is not None
+    assert report.distinct <= report.total_classes < report.total_worlds
 
 
 def test_keeping_fewer_renamed_states_changes_no_policy(monkeypatch: pytest.MonkeyPatch) -> None:
