@@ -112,6 +112,7 @@ class Symmetry:
         self.perms: list[Perm] = [tuple(range(n))]
         self._pid: dict[Perm, int] = {self.perms[0]: 0}
         self._atom_maps: dict[int, dict[int, int]] = {}
+        self._moving: dict[int, int] = {}  # renaming -> the atoms it moves, as a mask
         self._task_maps: dict[int, dict[int, int]] = {}
         self._inverse: dict[int, int] = {0: 0}
         # atoms and tasks naming a movable object, with each object's role in them
@@ -246,8 +247,10 @@ class Symmetry:
     def state(self, pid: int, s: int) -> int:
         """The state ``s`` with its objects renamed by ``pid`` (memoised: the worlds of many
         belief sets share states, so most renamings have been done before)."""
-        moved = s & self.movable_mask
-        if pid == 0 or not moved:
+        if pid == 0 or not s & self.movable_mask:
+            return s
+        moved = s & self.moving(pid)
+        if not moved:
             return s
         cache = self._renamed.get(pid)
         if cache is None:
@@ -256,6 +259,18 @@ class Symmetry:
         if r is None:
             r = self._keep_renamed(pid, cache, s, self._rename_state(pid, s, moved))
         return r
+
+    def moving(self, pid: int) -> int:
+        """The atoms ``pid`` moves (to another atom), as a mask: a state without any is its
+        own image. A canonical renaming often swaps a few objects of many, so this is a
+        small part of the atoms naming interchangeable objects."""
+        m = self._moving.get(pid)
+        if m is None:
+            m = 0
+            for i in self.atom_map(pid):
+                m |= 1 << i
+            self._moving[pid] = m
+        return m
 
     def _keep_renamed(self, pid: int, cache: dict[int, int], s: int, r: int) -> int:
         """Keep ``r`` as the image of ``s`` under ``pid`` (``cache``: ``pid``'s table; every
@@ -271,13 +286,13 @@ class Symmetry:
         return r
 
     def _rename_state(self, pid: int, s: int, moved: int) -> int:
-        """:meth:`state`, computed: each movable atom of ``s`` moved to its image."""
+        """:meth:`state`, computed: each atom of ``s`` that ``pid`` moves (``moved``, the
+        part of ``s`` in :meth:`moving`) taken to its image."""
         amap = self.atom_map(pid)
-        out = s & ~self.movable_mask
+        out = s & ~self.moving(pid)
         while moved:
             low = moved & -moved
-            i = low.bit_length() - 1
-            out |= 1 << amap.get(i, i)
+            out |= 1 << amap[low.bit_length() - 1]
             moved ^= low
         return out
 
@@ -307,14 +322,14 @@ class Symmetry:
         distinct worlds, so sorting is enough)."""
         if pid == 0:
             return tuple(sorted(ws))
-        movable, agenda, renamed = self.movable_mask, self.agenda, self._renamed
+        moving, agenda, renamed = self.moving(pid), self.agenda, self._renamed
         cache = renamed.get(pid)
         if cache is None:
             cache = renamed[pid] = {}
         agendas: dict[Agenda, Agenda] = {}  # the worlds' robot agendas are few
         out = []
         for s, a in ws:
-            moved = s & movable
+            moved = s & moving
             if moved:
                 r = cache.get(s)
                 if r is None:
@@ -352,7 +367,7 @@ class Symmetry:
             for o, role in roles[low.bit_length() - 1]:
                 acc[o].append(role)
             moved ^= low
-        return tuple(tuple(sorted(x)) for x in acc)
+        return tuple([tuple(sorted(x)) if len(x) > 1 else tuple(x) for x in acc])
 
     def _agenda_sig(self, ag: Agenda) -> tuple[tuple[tuple[int, int], ...], ...]:
         """Per movable object, (position, role) of the agenda's tasks naming it."""
@@ -371,8 +386,15 @@ class Symmetry:
         """:meth:`_state_sig` with each object's signature interned as an int."""
         r = self._sig_ids.get(s)
         if r is None:
-            r = self._sig_ids[s] = tuple(self._intern(x, self._sig_index, self._sig_values)
-                                         for x in self._state_sig(s))
+            index, values = self._sig_index, self._sig_values
+            ids = []
+            for x in self._state_sig(s):
+                i = index.get(x)
+                if i is None:
+                    i = index[x] = len(values)
+                    values.append(x)
+                ids.append(i)
+            r = self._sig_ids[s] = tuple(ids)
         return r
 
     def _agenda_ids(self, ag: Agenda) -> tuple[int, ...]:
