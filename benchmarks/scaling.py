@@ -3,13 +3,18 @@
     .venv/bin/python benchmarks/scaling.py [--max-size N] [--only PATTERN ...] [--big]
         [--no-symmetry] [--timeout S] [--max-memory SIZE] [--repeat N] [--json FILE]
         [--plot FILE.png] [--baseline FILE.json] [--src DIR] [--versus DIR]
+        [--report classes [--top N] [--every]]
 
 Same grid and table as ``ehatp bench scaling`` (``ehatp.experiments.bench``). ``--src DIR`` times
 another checkout's ``src`` directory with this checkout's grid (how docs/benchmarks.md measured
 "before"); ``--versus DIR`` runs every instance with both, alternately (``DIR`` first, then
 this checkout, run after run) so that a noisy machine's drift falls on both alike, and prints
 and plots the two side by side; ``--baseline FILE.json`` adds an earlier run's rows to the
-plot. Timing lives here and in that command, never in the unit tests.
+plot. ``--report classes`` solves each instance once (the search alone) and reports, for its
+``--top N`` nodes with the most worlds, how many classes the human's worlds form under the
+swaps of objects that leave the node unchanged (``ehatp.experiments.classes``; issue 17 §2);
+``--every`` also sums the worlds and the classes over every node of the search. Timing
+lives here and in that command, never in the unit tests.
 """
 
 from __future__ import annotations
@@ -51,6 +56,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--src", metavar="DIR", help="time the ehatp package under DIR instead")
     ap.add_argument("--versus", metavar="DIR",
                     help="also time the ehatp package under DIR, alternating run by run")
+    ap.add_argument("--report", choices=["classes"],
+                    help="classes: count the human's worlds as classes instead of timing")
+    ap.add_argument("--top", type=int, default=5, metavar="N",
+                    help="--report classes: the nodes with the most worlds counted (default 5)")
+    ap.add_argument("--every", action="store_true",
+                    help="--report classes: also sum worlds and classes over every node (slow)")
     args = ap.parse_args(argv)
     args.src = args.src or SRC
     if args.repeat < 1:
@@ -63,6 +74,8 @@ def main(argv: list[str] | None = None) -> int:
     symmetry = False if args.no_symmetry else None
     if not points:
         ap.error("no grid instance selected")
+    if args.report == "classes":
+        return report_classes(points, args.src, args.timeout, args.top, args.every, args.json)
 
     def notify(p: bench.GridPoint, i: int, n: int, run: int) -> None:
         if sys.stderr.isatty():
@@ -100,6 +113,60 @@ def main(argv: list[str] | None = None) -> int:
                   file=sys.stderr)
     return 1 if any(r["status"] in ("crashed", "killed") for rows in series.values()
                     for r in rows) else 0
+
+
+# the child of --report classes: count the classes of one instance, one JSON line
+_CLASSES_CHILD = r"""
+import dataclasses, json, sys
+import ehatp
+from ehatp.experiments.classes import count
+report = count(ehatp.load(sys.argv[1]), top=int(sys.argv[2]), timeout=float(sys.argv[3]),
+               every=sys.argv[4] == "every")
+print(json.dumps(dataclasses.asdict(report)))
+"""
+
+
+def report_classes(points: list[bench.GridPoint], src: str, timeout: float, top: int,
+                   every: bool, out: Path | None) -> int:
+    """Print, per point, the classes of its ``top`` nodes with the most worlds (one fresh
+    process each): ``|W| -> classes`` with the cells (sizes of the sets of objects whose
+    swaps fix the node), and the time the count took beside the node's canonical form."""
+    import os
+    import subprocess
+    import tempfile
+
+    rows = []
+    env = dict(os.environ, PYTHONPATH=src + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    print("The human's worlds as classes under the swaps that fix a node (issue 17 §2): "
+          "|W| -> classes [cells]\n(count ms: finding them, a measurement; canon ms: the "
+          "node's canonical form, as the search computes it)\n")
+    for p in points:
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, f"{p.name}.toml")
+            Path(path).write_text(p.toml(), encoding="utf-8")
+            proc = subprocess.run([sys.executable, "-c", _CLASSES_CHILD, path, str(top),
+                                   str(timeout), "every" if every else "top"],
+                                  capture_output=True, text=True, env=env,
+                                  timeout=timeout * 3 + (600 if every else 60))
+        if proc.returncode != 0 or not proc.stdout.strip():
+            err = (proc.stderr.strip().splitlines() or [f"exit {proc.returncode}"])[-1]
+            print(f"{p.name}: crashed ({err})")
+            rows.append({"instance": p.name, "status": "crashed", "error": err})
+            continue
+        row = {"instance": p.name, **json.loads(proc.stdout.strip().splitlines()[-1])}
+        rows.append(row)
+        print(f"{p.name}: {row['status']}, {row['distinct']:,} canonical states, "
+              f"largest |W| {row['max_worlds']:,}")
+        for n in row["nodes"]:
+            cells = ", ".join(str(c) for c in n["cells"])
+            print(f"  {n['worlds']:>6,} -> {n['classes']:>5,}  ({n['worlds'] / n['classes']:.1f}x)"
+                  f"  cells [{cells}]  count {n['count_ms']:.1f} ms, canon {n['canon_ms']:.1f} ms")
+        if row.get("total_worlds") is not None:
+            w, c = row["total_worlds"], row["total_classes"]
+            print(f"  every node: {w:,} worlds -> {c:,} classes ({w / max(c, 1):.1f}x)")
+    if out is not None:
+        out.write_text(json.dumps(rows, indent=1) + "\n", encoding="utf-8")
+    return 1 if any(r["status"] == "crashed" for r in rows) else 0
 
 
 def _medians(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:

@@ -112,6 +112,7 @@ class Symmetry:
         self.perms: list[Perm] = [tuple(range(n))]
         self._pid: dict[Perm, int] = {self.perms[0]: 0}
         self._atom_maps: dict[int, dict[int, int]] = {}
+        self._moving: dict[int, int] = {}  # renaming -> the atoms it moves, as a mask
         self._task_maps: dict[int, dict[int, int]] = {}
         self._inverse: dict[int, int] = {0: 0}
         # atoms and tasks naming a movable object, with each object's role in them
@@ -134,9 +135,9 @@ class Symmetry:
             if roles_t:
                 self._task_parts[t] = parts
                 self._task_roles[t] = roles_t
-        self._sig: dict[int, tuple[tuple[int, ...], ...]] = {}
         self._ag_sig: dict[Agenda, tuple[tuple[tuple[int, int], ...], ...]] = {}
-        self._renamed: dict[tuple[int, int], int] = {}
+        self._renamed: dict[int, dict[int, int]] = {}  # renaming -> state -> its image
+        self._renamed_count = 0
         self._renamed_ag: dict[tuple[int, Agenda], Agenda] = {}
         self._columns: dict[Worlds, _WorldColumns] = {}
         self._sig_ids: dict[int, tuple[int, ...]] = {}
@@ -246,25 +247,52 @@ class Symmetry:
     def state(self, pid: int, s: int) -> int:
         """The state ``s`` with its objects renamed by ``pid`` (memoised: the worlds of many
         belief sets share states, so most renamings have been done before)."""
-        moved = s & self.movable_mask
-        if pid == 0 or not moved:
+        if pid == 0 or not s & self.movable_mask:
             return s
-        key = (pid, s)
-        r = self._renamed.get(key)
+        moved = s & self.moving(pid)
+        if not moved:
+            return s
+        cache = self._renamed.get(pid)
+        if cache is None:
+            cache = self._renamed[pid] = {}
+        r = cache.get(s)
         if r is None:
-            if len(self._renamed) >= RENAMED_CACHE:
-                self._renamed.clear()
-            r = self._renamed[key] = self._rename_state(pid, s, moved)
+            r = self._keep_renamed(pid, cache, s, self._rename_state(pid, s, moved))
+        return r
+
+    def moving(self, pid: int) -> int:
+        """The atoms ``pid`` moves (to another atom), as a mask: a state without any is its
+        own image. A canonical renaming often swaps a few objects of many, so this is a
+        small part of the atoms naming interchangeable objects."""
+        m = self._moving.get(pid)
+        if m is None:
+            m = 0
+            for i in self.atom_map(pid):
+                m |= 1 << i
+            self._moving[pid] = m
+        return m
+
+    def _keep_renamed(self, pid: int, cache: dict[int, int], s: int, r: int) -> int:
+        """Keep ``r`` as the image of ``s`` under ``pid`` (``cache``: ``pid``'s table; every
+        table starts afresh once :data:`RENAMED_CACHE` states are kept). One table per
+        renaming, keyed by the state alone: a (renaming, state) key cost a tuple per entry
+        (78 MB of 464 at 16 cubes / 3 boxes / K=8)."""
+        if self._renamed_count >= RENAMED_CACHE:
+            self._renamed.clear()
+            self._renamed_count = 0
+            cache = self._renamed[pid] = {}
+        cache[s] = r
+        self._renamed_count += 1
         return r
 
     def _rename_state(self, pid: int, s: int, moved: int) -> int:
-        """:meth:`state`, computed: each movable atom of ``s`` moved to its image."""
+        """:meth:`state`, computed: each atom of ``s`` that ``pid`` moves (``moved``, the
+        part of ``s`` in :meth:`moving`) taken to its image."""
         amap = self.atom_map(pid)
-        out = s & ~self.movable_mask
+        out = s & ~self.moving(pid)
         while moved:
             low = moved & -moved
-            i = low.bit_length() - 1
-            out |= 1 << amap.get(i, i)
+            out |= 1 << amap[low.bit_length() - 1]
             moved ^= low
         return out
 
@@ -292,7 +320,28 @@ class Symmetry:
     def worlds(self, pid: int, ws: Worlds) -> Worlds:
         """The worlds ``ws`` renamed, in canonical order (a renaming maps distinct worlds to
         distinct worlds, so sorting is enough)."""
-        return tuple(sorted([(self.state(pid, s), self.agenda(pid, a)) for s, a in ws]))
+        if pid == 0:
+            return tuple(sorted(ws))
+        moving, agenda, renamed = self.moving(pid), self.agenda, self._renamed
+        cache = renamed.get(pid)
+        if cache is None:
+            cache = renamed[pid] = {}
+        agendas: dict[Agenda, Agenda] = {}  # the worlds' robot agendas are few
+        out = []
+        for s, a in ws:
+            moved = s & moving
+            if moved:
+                r = cache.get(s)
+                if r is None:
+                    r = self._keep_renamed(pid, cache, s, self._rename_state(pid, s, moved))
+                    cache = renamed[pid]  # a new table when they all started afresh
+                s = r
+            b = agendas.get(a)
+            if b is None:
+                b = agendas[a] = agenda(pid, a)
+            out.append((s, b))
+        out.sort()
+        return tuple(out)
 
     def apply(self, pid: int, es: EState) -> EState:
         """The epistemic state ``es`` with its objects renamed by ``pid``."""
@@ -306,19 +355,19 @@ class Symmetry:
 
     # -- canonical form -----------------------------------------------------------------------
     def _state_sig(self, s: int) -> tuple[tuple[int, ...], ...]:
-        """Per movable object, the roles of its true atoms in ``s`` (sorted)."""
-        r = self._sig.get(s)
-        if r is None:
-            acc: list[list[int]] = [[] for _ in self.objects]
-            moved = s & self.movable_mask
-            roles = self._atom_roles
-            while moved:
-                low = moved & -moved
-                for o, role in roles[low.bit_length() - 1]:
-                    acc[o].append(role)
-                moved ^= low
-            r = self._sig[s] = tuple(tuple(sorted(x)) for x in acc)
-        return r
+        """Per movable object, the roles of its true atoms in ``s`` (sorted). Not kept: a
+        state's signature is kept interned (:meth:`_state_ids`), one int per object, since
+        the states of the human's worlds are many (at 16 cubes / 3 boxes / K=8 the tuples
+        kept here took 147 MB)."""
+        acc: list[list[int]] = [[] for _ in self.objects]
+        moved = s & self.movable_mask
+        roles = self._atom_roles
+        while moved:
+            low = moved & -moved
+            for o, role in roles[low.bit_length() - 1]:
+                acc[o].append(role)
+            moved ^= low
+        return tuple([tuple(sorted(x)) if len(x) > 1 else tuple(x) for x in acc])
 
     def _agenda_sig(self, ag: Agenda) -> tuple[tuple[tuple[int, int], ...], ...]:
         """Per movable object, (position, role) of the agenda's tasks naming it."""
@@ -337,8 +386,15 @@ class Symmetry:
         """:meth:`_state_sig` with each object's signature interned as an int."""
         r = self._sig_ids.get(s)
         if r is None:
-            r = self._sig_ids[s] = tuple(self._intern(x, self._sig_index, self._sig_values)
-                                         for x in self._state_sig(s))
+            index, values = self._sig_index, self._sig_values
+            ids = []
+            for x in self._state_sig(s):
+                i = index.get(x)
+                if i is None:
+                    i = index[x] = len(values)
+                    values.append(x)
+                ids.append(i)
+            r = self._sig_ids[s] = tuple(ids)
         return r
 
     def _agenda_ids(self, ag: Agenda) -> tuple[int, ...]:
@@ -356,6 +412,12 @@ class Symmetry:
             i = index[x] = len(values)
             values.append(x)
         return i
+
+    def forget(self, worlds: Worlds) -> None:
+        """Drop what :meth:`canon` kept of ``worlds`` (their signatures), so that the next
+        canonical form of a state with these worlds computes them again (a benchmark's
+        timing: ``experiments/classes.py``)."""
+        self._columns.pop(worlds, None)
 
     def canon(self, es: EState) -> tuple[EState, int]:
         """The canonical representative of ``es`` and the permutation that maps ``es`` to it.
@@ -385,7 +447,8 @@ class Symmetry:
         on the rest, and kept with the set of worlds (:class:`_WorldColumns`): most generated
         states share their worlds with one met before. Signatures are compared by value, never
         by the order they were first met in, so the form does not depend on history."""
-        tsig = self._state_sig(es.true)
+        sv = self._sig_values
+        tsig = [sv[i] for i in self._state_ids(es.true)]
         rsig = self._agenda_sig(es.robot_agenda)
         hsigs = [self._agenda_sig(h) for h in es.human_agendas]
         n = len(self.objects)
