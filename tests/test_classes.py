@@ -20,8 +20,9 @@ from ehatp.model.vocabulary import HUMAN
 from ehatp.run.walk import walk_policy
 from ehatp.search import symmetry
 from ehatp.search.andor import search
+from ehatp.search.interchangeable import detect
 from ehatp.search.planner import solve
-from ehatp.search.symmetry import Symmetry, detect
+from ehatp.search.symmetry import Symmetry
 
 THREE_CUBES = GridPoint("cubes", 2, 3, 2).toml()  # c1, c2 on mt; c3 on ot; box1, box2 empty
 

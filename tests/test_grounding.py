@@ -14,8 +14,8 @@ import ehatp
 from ehatp import Domain, InputError, Problem, Var
 from ehatp.model.grounding import ground_problem
 from ehatp.model.problem import BeliefWorld, Limits
+from ehatp.search.interchangeable import detect
 from ehatp.search.planner import solve
-from ehatp.search.symmetry import detect
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 LOCS = ["l0", "l1", "l2", "l3", "l4"]

@@ -16,7 +16,7 @@ from ehatp.experiments import agreement, randomgen
 from ehatp.model.grounding import ground_problem
 from ehatp.search.andor import GOAL, search
 from ehatp.search.heuristic import INF, Heuristic, least_costs
-from ehatp.search.symmetry import detect
+from ehatp.search.interchangeable import detect
 from ehatp.search.values import knuth
 
 from .conftest import EXAMPLES_DIR, TABLE1, Example

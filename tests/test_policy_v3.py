@@ -28,9 +28,9 @@ from ehatp.run.executor import Executor
 from ehatp.run.expand import expand_policy
 from ehatp.run.walk import walk_policy
 from ehatp.search import planner
+from ehatp.search.interchangeable import detect
 from ehatp.search.limits import LimitReached, SolveStatus
 from ehatp.search.planner import solve
-from ehatp.search.symmetry import detect
 
 from .conftest import DATA, EXAMPLES, ROOT, Example
 from .scenarios import problem as scenario

@@ -18,8 +18,9 @@ from ehatp.formats.problem_toml import load, loads
 from ehatp.model.grounding import ground_problem
 from ehatp.model.problem import Problem
 from ehatp.search.andor import search
+from ehatp.search.interchangeable import detect
 from ehatp.search.planner import solve
-from ehatp.search.symmetry import Symmetry, describe_classes, detect
+from ehatp.search.symmetry import Symmetry, describe_classes
 
 from .conftest import EXAMPLES, ROOT, Example
 

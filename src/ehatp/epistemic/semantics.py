@@ -14,9 +14,10 @@ from dataclasses import dataclass
 from itertools import combinations
 from typing import NamedTuple
 
+from ..model.agenda import Agenda, Networks
 from ..model.formula import And, Formula, conj, ground_atoms
 from ..model.grounded import FINISH, GOp, Grounded, no_check
-from ..model.htn import Agenda, Networks, Refiner
+from ..model.htn import Refiner
 from ..model.options import InformWhere, Intentions, Passes, Relevance, Speech
 from ..model.problem import Cost
 from ..model.vocabulary import Agent, MoveKind

@@ -61,9 +61,10 @@ from .graph import (
     move_key,
 )
 from .heuristic import Bound, Heuristic
+from .interchangeable import detect
 from .limits import Budget, LimitReached, SolveStatus, start_budget
 from .stats import Progress, Stats
-from .symmetry import SymSemantics, detect
+from .symmetry import SymSemantics
 from .values import LiveWorst, Values, compute_values
 
 Entry = tuple[Bound, Cost, int]  # the queue's: (f, g, node id)
