@@ -266,3 +266,35 @@ def test_the_experimenter_switches_over_the_socket_and_the_endpoint_with_the_key
     assert [r["profile"] for r in records if r["type"] == "switch"] == ["lazy", "hurry"]
     report = replay(records, setup.problem, setup.policy, setup.source, None, setup.graph)
     assert report.ok, str(report)
+
+
+def test_a_replan_keeps_its_own_graph_and_the_switch_after_it_relabels_that_one(
+        setup: Setup) -> None:
+    """stack-prefs played against the policy planned for a human who passes only when it has
+    nothing to do (``[human] passes = "idle"``, tests/test_play_joint.py): by hand, at step 2
+    (the human holds c1, the robot could pick c2) a ``pass`` is legal (C5) but not covered, so
+    the robot replans, with the replan's graph kept (C11); its reply to the pass is ``pick(c2)``,
+    its only action ((pass, wait) is no step). Then the human must place c1 (the robot, holding
+    c2 whose turn has not come, has nothing to do: no pass) and the robot waits. The switch to
+    ``hurry`` there relabels the replan's graph; the session reaches the goal and the log
+    (a replan and a switch) replays."""
+    from .test_play_joint import stack4
+
+    problem, policy = stack4(diligent_policy=True, path=PREFS)
+    s = PlaySession(problem, policy, setup.source, session_id="r", log=MemoryLog(),
+                    clock=lambda: "T", graph=setup.graph)
+    s.start()
+    s.run_robot()
+    assert move(s, "pick(c1)") == ["H pick(c1)", "R wait"]
+    assert move(s, "pass") == ["H pass", "R pick(c2)"]
+    assert s.replans == 1 and s.graph is not None and s.graph is not setup.graph
+    assert move(s, "place(c1, s1)") == ["H place(c1, s1)", "R wait"]
+    assert s.switch_profile("hurry") == "switched" and s.profile() == "hurry"
+    walked = walk_from(s.ex.copy())
+    assert walked.ok, str(walked)
+    to_goal(s)
+    assert s.outcome == "goal"
+    records = s.log.records  # type: ignore[attr-defined]
+    assert [r["type"] for r in records if r["type"] in ("replan", "profile")] == [
+        "replan", "profile"]
+    assert replay(records, problem, policy, setup.source, None, setup.graph).ok
