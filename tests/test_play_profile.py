@@ -159,13 +159,19 @@ def test_without_the_switch_the_builder_leaves_the_shared_cube_to_the_human(
 
 def test_a_switch_refused_is_one_record_with_the_reason_and_changes_nothing(
         setup: Setup) -> None:
-    """Unknown profile, a problem without profiles, a finished session: each request is
-    logged, refused with one reason, and the robot's policy is unchanged."""
+    """Unknown profile, no graph kept, a problem without profiles, a finished session: each
+    request is logged, refused with one reason, and the robot's policy is unchanged."""
     s = start(setup)
     before = s.ex.policy
     assert s.switch_profile("lazy") == "refused"
     assert s.log.records[-1]["reason"] == "no profile 'lazy': the problem names builder, hurry"
     assert s.ex.policy is before and s.profile() == "builder"
+    bare = PlaySession(setup.problem, setup.policy, setup.source, session_id="b",
+                       log=MemoryLog())
+    bare.start()
+    assert bare.switch_profile("hurry") == "refused" and bare.profile() == "builder"
+    assert bare.log.records[-1]["reason"].startswith(  # type: ignore[attr-defined]
+        "no explored graph is kept")
     cubes = load_setup(ROOT / PROBLEMS["p2"], None)
     assert cubes.graph is None
     c = PlaySession(cubes.problem, cubes.policy, cubes.source, session_id="c", log=MemoryLog())

@@ -574,8 +574,8 @@ class PlaySession:
         if name not in obj.profiles:
             return f"no profile {name!r}: the problem names " + ", ".join(sorted(obj.profiles))
         if self.graph is None:
-            return ("no explored graph is kept (the session was started without one): the "
-                    "profile cannot be relabelled")
+            return ("no explored graph is kept (the search at the start stopped at a limit, "
+                    "or the session was given none): the profile cannot be relabelled")
         if not self.started:
             return "the session has not started"
         if self.over:
