@@ -166,3 +166,59 @@ def test_joint_steps_a_timed_out_decision_replans_and_the_participant_stacks_to_
         assert replay(records, live.problem, live.policy, live.source).ok
         errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
         assert errors == []
+
+
+def test_the_experimenter_page_switches_the_robot_s_profile_and_the_participant_sees_the_reply(
+        browser: Any, tmp_path: Path) -> None:  # noqa: F811
+    """stack-prefs (profiles ``builder`` and ``hurry``; derived by hand in
+    tests/test_play_profile.py): the participant picks c1 (the robot waits); at step 2's start
+    the experimenter's page switches the robot to ``hurry`` with its control; back on the
+    participant's page the signal is now "You can act in parallel" (builder's was "Act if you
+    will"), and to ``place(c1, s1)`` the robot picks c2 at once (builder would wait). The
+    participant's page never names a profile; the log replays."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import Select, WebDriverWait
+
+    from ehatp.play.files import load_setup, session_log
+    from ehatp.play.server import Hub
+    from ehatp.play.session import PlaySession
+
+    setup = load_setup(ROOT / "examples/concurrent/stack-prefs.toml", None, "none")
+
+    def factory(sid: str) -> PlaySession:
+        return PlaySession(setup.problem, setup.policy, setup.source, session_id=sid,
+                           log=session_log(tmp_path, sid), graph=setup.graph)
+
+    hub = Hub(factory, key="k3y")
+    signal = "return document.getElementById('signal').textContent"
+    with serving(hub) as address:
+        browser.get(f"http://{address}/")
+        sid = browser.current_url.rstrip("/").split("/")[-1]
+        live = hub.sessions[sid].session
+        page = wait_turn(browser)
+        browser.find_element(By.CSS_SELECTOR, 'button[data-move="pick(c1)"]').click()
+        page = wait_turn(browser, page["step"])
+        assert page["step"] == "2"
+        assert browser.execute_script(signal) == "R signals: Act if you will"
+        browser.get(f"http://{address}/experimenter/{sid}?key=k3y")
+        WebDriverWait(browser, 20).until(
+            lambda d: d.execute_script("return document.body.dataset.profile") == "builder")
+        Select(browser.find_element(By.ID, "profile-choice")).select_by_value("hurry")
+        browser.find_element(By.ID, "profile-switch").click()
+        WebDriverWait(browser, 20).until(
+            lambda d: d.execute_script("return document.body.dataset.switch") == "switched")
+        assert browser.find_element(By.ID, "profile-result").text == (
+            "Switched: the robot now follows hurry.")
+        browser.get(f"http://{address}/s/{sid}")
+        page = wait_turn(browser)
+        assert browser.execute_script(signal) == "R signals: You can act in parallel"
+        browser.find_element(By.CSS_SELECTOR, 'button[data-move="place(c1, s1)"]').click()
+        page = wait_turn(browser, page["step"])
+        assert [e["text"] for e in page["feed"]][-1] == "R: pick(c2)"
+        assert not any(n in page["text"] for n in ("builder", "hurry", "profile"))
+        errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+        assert errors == []
+    records = read_log(next(tmp_path.glob(f"*-{sid}.jsonl")))
+    assert [r["profile"] for r in records if r["type"] == "profile"] == ["hurry"]
+    assert live.profile() == "hurry"
+    assert replay(records, live.problem, live.policy, live.source, None, setup.graph).ok

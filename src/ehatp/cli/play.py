@@ -7,7 +7,9 @@ from __future__ import annotations
 import importlib.util
 import threading
 import webbrowser
+from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
 import typer
 
@@ -75,7 +77,7 @@ def play_cmd(
 
         return PlaySession(setup.problem, setup.policy, setup.source, session_id=sid,
                            log=session_log(folder, sid), view=setup.view,
-                           decision_timeout=decision_timeout)
+                           decision_timeout=decision_timeout, graph=setup.graph)
 
     hub = Hub(factory, robot_delay=robot_delay)
     try:
@@ -98,7 +100,7 @@ def play_cmd(
 
 def _replay(log: Path, problem: Path | None, policy: Path | None, view: str | None) -> None:
     from ..play.files import load_setup
-    from ..play.session import read_log, replay, timeline
+    from ..play.session import read_log, replay
 
     with user_errors(log):
         records = read_log(log)
@@ -107,8 +109,48 @@ def _replay(log: Path, problem: Path | None, policy: Path | None, view: str | No
     pol = policy or (Path(start["policy_file"]) if start.get("policy_file") else None)
     with user_errors(where):
         setup = load_setup(where, pol, "none" if view is None else view, want=start)
-        report = replay(records, setup.problem, setup.policy, setup.source, setup.view)
+        report = replay(records, setup.problem, setup.policy, setup.source, setup.view,
+                        setup.graph)
     for line in timeline(records):
         typer.echo(printable(line))
     typer.echo(printable(str(report)))
     raise typer.Exit(0 if report.ok else 1)
+
+
+def timeline(records: Iterable[dict[str, Any]]) -> list[str]:
+    """Return a session's log as text: each move (agent, move, policy node, whether it was
+    witnessed, covered or replanned), what the participant was shown, each replan, the end."""
+    out: list[str] = []
+    for r in records:
+        kind = r.get("type")
+        if kind == "start":
+            out.append(f"session {r.get('session')}: problem {r.get('problem')} "
+                       f"({r.get('problem_hash')}), policy {r.get('policy_file') or 'solved'}"
+                       f" ({r.get('policy_hash')}), {r.get('human')} played by a person")
+        elif kind == "step":
+            notes = [f"node {r.get('node')}"] + (["opening"] if r.get("opening") else []) + (
+                ["unseen by the human"] if not r.get("witnessed") else []) + (
+                ["not covered: replanned"] if r.get("replanned") else [])
+            out.append(f"{r.get('index')}. {r.get('agent')} {r.get('move')}  "
+                       f"({'; '.join(notes)})")
+        elif kind == "message":
+            out.append(f"     shown: {r.get('text')}")
+        elif kind == "replan":
+            out.append(f"   replan after {r.get('move')}: {r.get('status')}, cost "
+                       f"{r.get('cost')}, {r.get('nodes')} nodes")
+        elif kind == "timeout":
+            out.append(f"   the decision timed out after {r.get('seconds')} s: pass")
+        elif kind == "rejected":
+            out.append(f"   rejected {r.get('move')}: {r.get('reason')}")
+        elif kind == "profile":
+            out.append(f"   the robot switched to profile {r.get('profile')} at step "
+                       f"{r.get('step')}: {r.get('metrics')} {r.get('value')} "
+                       f"({r.get('policy_hash')})")
+        elif kind == "switch-queued":
+            out.append(f"   switch to profile {r.get('profile')} asked mid-step: at its end")
+        elif kind == "switch-refused":
+            out.append(f"   switch to profile {r.get('profile')} refused: {r.get('reason')}")
+        elif kind == "end":
+            out.append(f"end: {r.get('outcome')} after {r.get('steps')} steps, cost "
+                       f"{r.get('cost')}")
+    return out

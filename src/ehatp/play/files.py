@@ -6,35 +6,44 @@ from __future__ import annotations
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..errors import InputError
 from ..formats.policy import Policy
 from ..formats.policy_check import check_policy_problem, read_policy
 from ..formats.problem_toml import load
+from ..model.options import ObjectiveKind
 from ..model.problem import Problem
 from .session import FileLog, Source, policy_hash, sha256
 from .views import ViewHook, load_view, view_for
+
+if TYPE_CHECKING:
+    from ..search.planner import Relabeler
 
 
 @dataclass
 class Setup:
     """What every session of one ``ehatp play`` plays: the problem, the policy, where they
-    come from (with their hashes), and the view hook."""
+    come from (with their hashes), the view hook, and a preferences problem's explored graph
+    (docs/concurrent.md C11: kept for the experimenter's profile switches; read only, shared
+    by the sessions)."""
 
     problem: Problem
     policy: Policy
     source: Source
     view: ViewHook | None
+    graph: Relabeler | None = None
 
 
 def load_setup(problem_path: Path, policy_path: Path | None, view: str | None = None,
                *, want: dict[str, Any] | None = None) -> Setup:
     """Return the setup of ``problem_path`` and ``policy_path`` (solved now when None) and
     the view hook ``view`` names (``none``, ``module:function``, or None: the domain's own).
-    With ``want`` (a log's start record) the files' hashes must be the log's.
-    :class:`InputError` (``file: problem; fix``) when a file cannot be read, the problem has no
-    policy, or a hash differs."""
+    A preferences problem (``[objective] kind = "preferences"``) is searched once here with
+    its graph kept (``solve(problem, keep_graph=True)``, C11), for the experimenter's profile
+    switches; without ``--policy`` that search's policy is the one played. With ``want`` (a
+    log's start record) the files' hashes must be the log's. :class:`InputError` (``file:
+    problem; fix``) when a file cannot be read, the problem has no policy, or a hash differs."""
     try:
         raw = problem_path.read_bytes()
     except OSError as e:
@@ -46,13 +55,20 @@ def load_setup(problem_path: Path, policy_path: Path | None, view: str | None = 
         raise InputError(str(problem_path), "", "is not the problem file the session played "
                          f"(its hash is {p_hash}, the log's {want.get('problem_hash')})",
                          "give the session's problem file as PROBLEM")
+    prefs = problem.objective.kind == ObjectiveKind.PREFERENCES
+    graph = None
     if policy_path is not None:
         policy = read_policy(policy_path)
         check_policy_problem(policy, policy_path, problem)
+        if prefs:
+            from ..search.planner import solve
+
+            graph = solve(problem, keep_graph=True).graph  # None: stopped at a limit
     else:
         from ..search.planner import solve
 
-        result = solve(problem)
+        result = solve(problem, keep_graph=prefs)
+        graph = result.graph
         if result.policy is None:
             raise InputError(str(problem_path), "", "has no policy to play: "
                              f"{result.reason or result.status}",
@@ -76,7 +92,7 @@ def load_setup(problem_path: Path, policy_path: Path | None, view: str | None = 
         name = "default" if hook is None else f"{hook.__module__}:{hook.__name__}"
     source = Source(str(problem_path.resolve()), p_hash,
                     None if policy_path is None else str(policy_path.resolve()), pol_hash, name)
-    return Setup(problem, policy, source, hook)
+    return Setup(problem, policy, source, hook, graph)
 
 
 def log_folder(path: Path) -> Path:

@@ -10,7 +10,10 @@ Routes (docs/play.md):
   timer ran out (``{"timeout": STEP}``, STEP the moves played when it started: a ``pass``);
 - ``GET /experimenter?key=K`` the sessions; ``GET /experimenter/<id>?key=K`` one session as the
   experimenter sees it, ``WS /ws/<id>/experimenter?key=K`` its socket. ``K`` is made when the
-  server starts and printed with the URLs: a participant cannot open these pages.
+  server starts and printed with the URLs: a participant cannot open these pages. On a
+  preferences problem the experimenter switches the robot's profile with ``{"profile": NAME}``
+  on that socket (the page's control), or ``POST /api/s/<id>/profile?key=K`` with the body
+  ``{"profile": NAME}`` (a script's); a switch refused is one message with the reason.
 
 Data from a problem or a policy reaches the pages as JSON over the socket only, and the pages
 insert it as text (never as markup); every page is served with a content security policy that
@@ -126,6 +129,23 @@ class Hub:
             await self.push(live)
             await self.robot(live)
 
+    async def switch(self, live: Live, name: str) -> dict[str, Any]:
+        """The experimenter switches ``live``'s robot to profile ``name``
+        (:meth:`PlaySession.switch_profile`), once the robot's moves due are played (as a
+        replay plays them before the next record); returns ``{"result": switched | queued |
+        refused, "profile": ..., "reason": ...}`` (the reason when refused)."""
+        async with live.lock:
+            await self.robot(live)
+            s = live.session
+            result = await anyio.to_thread.run_sync(s.switch_profile, name)
+            out: dict[str, Any] = {"result": result, "profile": s.profile()}
+            if result == "refused":
+                out["reason"] = next(r for r in reversed(s.tail)
+                                     if r["type"] == "switch-refused")["reason"]
+            await self.push(live)
+            await self.robot(live)
+            return out
+
     async def advance(self, live: Live) -> None:
         async with live.lock:
             await self.robot(live)
@@ -227,8 +247,30 @@ def make_app(hub: Hub) -> Starlette:
             await ws.send_text(json.dumps({"type": "experimenter",
                                            "view": live.session.experimenter_view()},
                                           ensure_ascii=False))
-            while True:
-                await ws.receive_text()  # the experimenter's page only listens
+            while True:  # the experimenter's page listens, and may switch the profile
+                name = _field(await ws.receive_text(), "profile")
+                if not isinstance(name, str):
+                    await ws.send_text(json.dumps({"type": "error",
+                                                   "message": 'send {"profile": NAME}'}))
+                    continue
+                out = await hub.switch(live, name)
+                await ws.send_text(json.dumps({"type": "switch", **out}, ensure_ascii=False))
+
+    async def profile(request: Request) -> Response:
+        if not keyed(request):
+            return JSONResponse({"result": "refused", "reason": "forbidden: the experimenter's "
+                                 "key is missing or wrong; give ?key=K as the server printed "
+                                 "it"}, 403, headers=HEADERS)
+        live = hub.sessions.get(request.path_params["sid"])
+        if live is None:
+            return JSONResponse({"result": "refused", "reason": "no such session"}, 404,
+                                headers=HEADERS)
+        name = _field((await request.body()).decode("utf-8", "replace"), "profile")
+        if not isinstance(name, str):
+            return JSONResponse({"result": "refused", "reason": 'send {"profile": NAME}'},
+                                400, headers=HEADERS)
+        out = await hub.switch(live, name)
+        return JSONResponse(out, 409 if out["result"] == "refused" else 200, headers=HEADERS)
 
     async def favicon(request: Request) -> Response:
         return Response(status_code=204, headers=HEADERS)
@@ -241,6 +283,7 @@ def make_app(hub: Hub) -> Starlette:
         Route("/experimenter", experimenter_index),
         Route("/experimenter/{sid}", experimenter),
         Route("/api/sessions", sessions),
+        Route("/api/s/{sid}/profile", profile, methods=["POST"]),
         WebSocketRoute("/ws/{sid}", socket),
         WebSocketRoute("/ws/{sid}/experimenter", experimenter_socket),
     ])

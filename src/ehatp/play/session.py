@@ -7,11 +7,16 @@ every world the human entertains, the units its worlds disagree on, what it sees
 robot says, and the robot's actions only when they are co-present -- and what the experimenter
 sees (the truth, the policy node, the worlds, the robot's hypotheses). A participant's move the
 policy does not cover, but the human can make, is applied and the robot plans again from there
-with :meth:`Executor.replan`, as ``ehatp execute --replan`` does (docs/execution.md).
+with :meth:`Executor.replan`, as ``ehatp execute --replan`` does (docs/execution.md). On a
+preferences problem (docs/concurrent.md C11) the experimenter may switch the robot's profile
+mid-session (:meth:`PlaySession.switch_profile`): the explored graph kept at the start (and a
+replan's own) is relabelled from the current state, without a new search, at a step's start;
+a switch asked in the middle of a step waits for its end.
 
 Every session writes a log, one JSON object a line, flushed line by line (docs/play.md, "The
 log"): its start (session id, problem and policy hashes), every move, every message the
-participant was shown, every replan, the participant's beliefs after every step, its end.
+participant was shown, every replan, every profile switch, the participant's beliefs after
+every step, its end.
 :func:`replay` plays a log's choices again and compares every record: the same problem and
 policy give the same records, apart from times and session ids.
 """
@@ -27,7 +32,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import IO, Any, Protocol
+from typing import IO, TYPE_CHECKING, Any, Protocol
 
 from .. import __version__
 from ..epistemic.semantics import (
@@ -44,13 +49,16 @@ from ..epistemic.semantics import (
 from ..epistemic.state import states_of
 from ..errors import ExecutionError, InputError, UncoveredHumanAction
 from ..formats.policy import Policy, label_key, num
-from ..model.options import StepFirst
+from ..model.options import ObjectiveKind, StepFirst
 from ..model.problem import Problem, call_str
 from ..model.vocabulary import HUMAN
 from ..run.execute import beliefs
 from ..run.executor import Executor
 from ..run.step import Step
 from .views import Perspective, Scene, Unsure, ViewHook, check_scene, predicate_of
+
+if TYPE_CHECKING:
+    from ..search.planner import Relabeler
 
 LOG_TAIL = 200  # the records an experimenter view carries
 # what the robot signals at the start of a joint step (docs/play.md, "Joint steps"), by key
@@ -258,11 +266,15 @@ class PlaySession:
     goes to ``log``. Call :meth:`start` first, then :meth:`robot_step` while
     :attr:`robot_to_move`, and :meth:`choose` with the participant's moves.
     ``decision_timeout`` (seconds; joint steps only): the participant's page counts it down at
-    each decision where the human may pass, and :meth:`timeout` plays ``pass`` when it ends."""
+    each decision where the human may pass, and :meth:`timeout` plays ``pass`` when it ends.
+    ``graph`` (a preferences problem, docs/concurrent.md C11): the explored graph
+    ``solve(problem, keep_graph=True)`` kept, which :meth:`switch_profile` relabels; a replan
+    keeps its own."""
 
     def __init__(self, problem: Problem, policy: Policy, source: Source, *, session_id: str,
                  log: Log, view: ViewHook | None = None,
-                 clock: Callable[[], str] = now, decision_timeout: float | None = None) -> None:
+                 clock: Callable[[], str] = now, decision_timeout: float | None = None,
+                 graph: Relabeler | None = None) -> None:
         if decision_timeout is not None and not decision_timeout > 0:
             raise ValueError(f"decision_timeout is a number of seconds above 0, "
                              f"got {decision_timeout!r}")
@@ -275,6 +287,9 @@ class PlaySession:
         self.feed: list[FeedEntry] = []
         self.outcome: str | None = None  # goal | failed | no-policy | dead-end
         self.replans = 0
+        self.graph = graph
+        self.switches = 0  # profile switches made
+        self.queued: str | None = None  # a switch asked mid-step, made at the step's end
         self.seq = 0
         self.tail: deque[dict[str, Any]] = deque(maxlen=LOG_TAIL)
         self.started = False
@@ -402,13 +417,17 @@ class PlaySession:
     def _replan(self, label: str) -> str:
         ex = self.ex
         try:
-            result = ex.replan(label)  # as `ehatp execute --replan` does (docs/execution.md)
+            # as `ehatp execute --replan` does (docs/execution.md); a preferences problem's
+            # replan keeps its own graph, which holds the states from here (C11)
+            result = ex.replan(label, **({"keep_graph": True} if self.preferences else {}))
         except ExecutionError as e:
             self.record("replan", move=label, after=len(ex.history), status="no-policy",
                         reason=str(e))
             self._end("no-policy", move=label)
             return "no-policy"
         assert result.policy is not None
+        if result.graph is not None:
+            self.graph = result.graph
         self.replans += 1
         stats = result.stats
         self.record("replan", move=label, after=len(ex.history), status=result.status,
@@ -476,8 +495,16 @@ class PlaySession:
         return out
 
     def _next(self) -> None:
-        """After a move: the end, or the participant's options when it is its turn."""
+        """After a move: a switch asked mid-step, now that the step is over; then the end, or
+        the participant's options when it is its turn."""
         ex = self.ex
+        if self.queued is not None and not ex.state.pending:
+            name, self.queued = self.queued, None
+            if ex.done:
+                self.record("switch-refused", profile=name, step=len(ex.history),
+                            reason="the task is done: there is nothing left to relabel")
+            else:
+                self._switch(name)
         if ex.done:
             self._end("goal" if ex.goal_reached else "dead-end")
         elif ex.state.turn == HUMAN:
@@ -500,6 +527,77 @@ class PlaySession:
             self._say(FeedEntry(None, "end", "The session is over."))
         self.record("end", outcome=outcome, steps=len(ex.history), cost=num(ex.cost),
                     truth=ex.truth(), worlds=len(ex.state.worlds), **fields)
+
+    # -- the robot's preference profile (docs/concurrent.md C11) ------------------------------
+    @property
+    def preferences(self) -> bool:
+        """Whether the problem is a preferences problem (its robot's profile can switch)."""
+        return self.problem.objective.kind == ObjectiveKind.PREFERENCES
+
+    def profile(self) -> str | None:
+        """The profile the robot follows now (None: no preferences problem)."""
+        return self.ex.problem.objective.profile if self.preferences else None
+
+    def switch_profile(self, name: str) -> str:
+        """The experimenter switches the robot to preference profile ``name`` (the
+        participant's true one, learnt during the task; C11): from the next decision on, the
+        robot follows the policy ``name`` prefers, relabelled from the current state on the
+        kept graph (:meth:`Executor.switch_profile`; no new search). The participant is told
+        nothing; only the robot's replies, and its signals, may change.
+
+        Returns ``switched``; ``queued`` when it comes in the middle of a joint step (the
+        human's reply to the robot's move is due, steps where the robot decides first): the
+        step's first move was chosen under the old profile and its reply is due, so the switch
+        is made when the step ends, before the next one; or ``refused`` (one record with the
+        reason, nothing changes): not a preferences problem, no such profile, no graph kept,
+        the session not started or over. The request is logged (``switch``) and replayed;
+        the switch made is logged (``profile``: the profile, the step, the new policy's hash,
+        its root vector)."""
+        self.record("switch", profile=name)
+        why = self._cannot_switch(name)
+        if why is not None:
+            self.record("switch-refused", profile=name, step=len(self.ex.history), reason=why)
+            return "refused"
+        if self.ex.state.pending:
+            self.queued = name
+            self.record("switch-queued", profile=name, step=len(self.ex.history))
+            return "queued"
+        return "switched" if self._switch(name) else "refused"
+
+    def _cannot_switch(self, name: str) -> str | None:
+        """Why the robot cannot switch to profile ``name`` now (None: it can, now or at the
+        step's end)."""
+        obj = self.ex.problem.objective
+        if not self.preferences:
+            return (f"cannot switch to profile {name!r}: the problem's [objective] kind is "
+                    f'"{obj.kind.value}", not "preferences" with [objective.profiles]')
+        if name not in obj.profiles:
+            return f"no profile {name!r}: the problem names " + ", ".join(sorted(obj.profiles))
+        if self.graph is None:
+            return ("no explored graph is kept (the search at the start stopped at a limit, "
+                    "or the session was given none): the profile cannot be relabelled")
+        if not self.started:
+            return "the session has not started"
+        if self.over:
+            return f"the session is over ({self.outcome})"
+        return None
+
+    def _switch(self, name: str) -> bool:
+        """Switch now (at a step's start); log it; False (logged as refused) when the executor
+        refuses (e.g. the current state is not in the kept graph)."""
+        ex = self.ex
+        assert self.graph is not None
+        try:
+            policy = ex.switch_profile(self.graph, name)
+        except ExecutionError as e:
+            self.record("switch-refused", profile=name, step=len(ex.history), reason=str(e))
+            return False
+        self.switches += 1
+        self.record("profile", profile=name, step=len(ex.history),
+                    policy_hash=policy_hash(policy), cost=num(policy.cost),
+                    nodes=len(policy.nodes), metrics=list(policy.objective["metrics"]),
+                    value=list(policy.objective["value"]))
+        return True
 
     # -- what each side sees ------------------------------------------------------------------
     def _robot_tasks(self) -> list[list[str]]:
@@ -570,6 +668,10 @@ class PlaySession:
                          "node": None if s.node is None else s.node.id,
                          "opening": s.opening, "replanned": s.replanned}
                         for s in ex.history],
+            "profiles": None if not self.preferences else {
+                "current": self.profile(), "names": sorted(ex.problem.objective.profiles),
+                "queued": self.queued, "switches": self.switches,
+                "can_switch": self.graph is not None and not self.over},
             "log": list(self.tail), "participant": self.participant_view()}
 
 
@@ -644,49 +746,21 @@ class ReplayReport:
                 f"{json.dumps(new, ensure_ascii=False)}")
 
 
-def timeline(records: Iterable[dict[str, Any]]) -> list[str]:
-    """Return a session's log as text: each move (agent, move, policy node, whether it was
-    witnessed, covered or replanned), what the participant was shown, each replan, the end."""
-    out: list[str] = []
-    for r in records:
-        kind = r.get("type")
-        if kind == "start":
-            out.append(f"session {r.get('session')}: problem {r.get('problem')} "
-                       f"({r.get('problem_hash')}), policy {r.get('policy_file') or 'solved'}"
-                       f" ({r.get('policy_hash')}), {r.get('human')} played by a person")
-        elif kind == "step":
-            notes = [f"node {r.get('node')}"] + (["opening"] if r.get("opening") else []) + (
-                ["unseen by the human"] if not r.get("witnessed") else []) + (
-                ["not covered: replanned"] if r.get("replanned") else [])
-            out.append(f"{r.get('index')}. {r.get('agent')} {r.get('move')}  "
-                       f"({'; '.join(notes)})")
-        elif kind == "message":
-            out.append(f"     shown: {r.get('text')}")
-        elif kind == "replan":
-            out.append(f"   replan after {r.get('move')}: {r.get('status')}, cost "
-                       f"{r.get('cost')}, {r.get('nodes')} nodes")
-        elif kind == "timeout":
-            out.append(f"   the decision timed out after {r.get('seconds')} s: pass")
-        elif kind == "rejected":
-            out.append(f"   rejected {r.get('move')}: {r.get('reason')}")
-        elif kind == "end":
-            out.append(f"end: {r.get('outcome')} after {r.get('steps')} steps, cost "
-                       f"{r.get('cost')}")
-    return out
-
-
 def replay(records: list[dict[str, Any]], problem: Problem, policy: Policy, source: Source,
-           view: ViewHook | None = None) -> ReplayReport:
+           view: ViewHook | None = None, graph: Relabeler | None = None) -> ReplayReport:
     """Play the participant's choices of ``records`` (a session's log) again, on ``problem``
-    and ``policy`` (those of the log: the caller checks the hashes), and compare every record
-    the replay writes with the log's (:func:`comparable`)."""
+    and ``policy`` (those of the log: the caller checks the hashes), with the experimenter's
+    profile switches where the log asked them (``graph``: the kept graph, searched again as
+    the session did), and compare every record the replay writes with the log's
+    (:func:`comparable`)."""
     start = records[0]
     source = dataclasses.replace(source, view=str(start.get("view", source.view)))
     log = MemoryLog()
     timeout = start.get("decision_timeout")
     session = PlaySession(problem, policy, source, session_id=str(start.get("session", "")),
                           log=log, view=view,
-                          decision_timeout=float(timeout) if timeout is not None else None)
+                          decision_timeout=float(timeout) if timeout is not None else None,
+                          graph=graph)
     session.start()
     session.run_robot()
     for r in records:
@@ -695,6 +769,9 @@ def replay(records: list[dict[str, Any]], problem: Problem, policy: Policy, sour
             session.run_robot()
         elif r["type"] == "choice" and not r.get("timeout"):  # a timeout's is replayed above
             session.choose(str(r.get("move", "")))
+            session.run_robot()
+        elif r["type"] == "switch":
+            session.switch_profile(str(r.get("profile", "")))
             session.run_robot()
     want, got = comparable(records), comparable(log.records)
     for i, (a, b) in enumerate(zip(want, got, strict=False)):
@@ -710,4 +787,4 @@ def replay(records: list[dict[str, Any]], problem: Problem, policy: Policy, sour
 
 __all__ = ["FeedEntry", "FileLog", "Log", "MemoryLog", "PlaySession", "ReplayReport",
            "Source", "comparable", "fixed_facts", "grouped", "perspective", "policy_hash",
-           "SIGNALS", "read_log", "replay", "robot_signal", "sha256", "timeline"]
+           "SIGNALS", "read_log", "replay", "robot_signal", "sha256"]

@@ -62,7 +62,33 @@ function draw(v) {
     + (h.opening ? "  (opening)" : "") + (h.replanned ? "  (REPLANNED)" : "")),
     "");
   document.getElementById("log").textContent = v.log.map(r => JSON.stringify(r)).join("\n");
+  drawProfiles(v.profiles);
   document.body.dataset.ready = "true";
+}
+
+// A preferences problem: the profile followed, and the control that switches it (sent on the
+// experimenter's socket as {"profile": NAME}; the server answers {"type": "switch", ...}).
+function drawProfiles(p) {
+  const pane = document.getElementById("profile-pane");
+  pane.hidden = !p;
+  if (!p) return;
+  document.getElementById("profile-current").textContent = p.current;
+  document.getElementById("profile-queued").textContent = p.queued
+    ? " (switching to " + p.queued + " when this step ends)" : "";
+  document.body.dataset.profile = p.current;
+  const select = document.getElementById("profile-choice");
+  if (select.options.length !== p.names.length) {
+    clear(select);
+    for (const n of p.names) { const o = el("option", "", n); o.value = n; select.appendChild(o); }
+  }
+  document.getElementById("profile-switch").disabled = !p.can_switch;
+}
+
+let socket = null;
+
+function switchProfile() {
+  const name = document.getElementById("profile-choice").value;
+  if (socket && name) socket.send(JSON.stringify({ profile: name }));
 }
 
 function session() {
@@ -70,9 +96,19 @@ function session() {
   const scheme = location.protocol === "https:" ? "wss://" : "ws://";
   const ws = new WebSocket(scheme + location.host + "/ws/" + encodeURIComponent(sid)
     + "/experimenter?key=" + encodeURIComponent(key));
+  socket = ws;
   ws.addEventListener("message", ev => {
     const msg = JSON.parse(ev.data);
     if (msg.type === "experimenter") draw(msg.view);
+    else if (msg.type === "switch") {
+      document.getElementById("profile-result").textContent = msg.result === "refused"
+        ? "Refused: " + msg.reason
+        : msg.result === "queued" ? "Queued: the switch is made when this step ends."
+        : "Switched: the robot now follows " + msg.profile + ".";
+      document.body.dataset.switch = msg.result;
+    } else if (msg.type === "error") {
+      document.getElementById("profile-result").textContent = msg.message;
+    }
   });
   ws.addEventListener("close", () => { setTimeout(session, 1000); });
 }
@@ -100,4 +136,5 @@ async function sessions() {
   setTimeout(sessions, 2000);
 }
 
+document.getElementById("profile-switch").addEventListener("click", switchProfile);
 if (sid) session(); else sessions();
