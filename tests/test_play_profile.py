@@ -187,6 +187,35 @@ def test_a_switch_refused_is_one_record_with_the_reason_and_changes_nothing(
         "switch", "switch-refused"]
 
 
+def test_no_keep_graph_searches_nothing_with_a_policy_and_switches_nothing(
+        setup: Setup, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``ehatp play --no-keep-graph --policy P``: the setup reads the policy and searches
+    nothing (the planner, patched to fail, is never called); its sessions refuse a switch,
+    saying no graph is kept. Without the flag the same setup searches once, for the graph."""
+    import ehatp.search.planner as planner
+
+    pol = tmp_path / "p.json"
+    setup.policy.write(pol)
+    calls: list[bool] = []
+
+    def counting(*args: Any, **kw: Any) -> Any:
+        calls.append(kw.get("keep_graph", False))
+        raise AssertionError("searched")
+
+    monkeypatch.setattr(planner, "solve", counting)
+    bare = load_setup(PREFS, pol, "none", keep_graph=False)
+    assert calls == [] and bare.graph is None and bare.policy == setup.policy
+    s = PlaySession(bare.problem, bare.policy, bare.source, session_id="n", log=MemoryLog(),
+                    graph=bare.graph)
+    s.start()
+    assert s.switch_profile("hurry") == "refused"
+    assert s.log.records[-1]["reason"].startswith(  # type: ignore[attr-defined]
+        "no explored graph is kept")
+    with pytest.raises(AssertionError, match="searched"):
+        load_setup(PREFS, pol, "none")
+    assert calls == [True]
+
+
 def test_a_switch_asked_mid_step_is_made_when_the_step_ends(setup: Setup) -> None:
     """The robot deciding first (the same table): at the participant's decision the robot's
     move of this step is made and the human's reply is due (mid-step, C1), so the switch is

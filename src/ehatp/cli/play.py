@@ -46,6 +46,10 @@ def play_cmd(
         "human may pass; when they run out, the human passes (default: no timer).",
         show_default=False),
     no_browser: bool = typer.Option(False, "--no-browser", help="Do not open a browser."),
+    keep_graph: bool = typer.Option(
+        True, "--keep-graph/--no-keep-graph", help="Preferences problems: keep the explored "
+        "graph (searched at the start, also with --policy) so that the experimenter can "
+        "switch the robot's profile; --no-keep-graph: no search with --policy, no switching."),
     replay_log: Path | None = typer.Option(
         None, "--replay", metavar="LOG", help="Replay a session's log instead: print it, "
         "play its moves again and check that every record is the same (exit 1 if not).",
@@ -67,7 +71,7 @@ def play_cmd(
     if not all(importlib.util.find_spec(m) for m in ("starlette", "uvicorn")):
         die(INSTALL)
     with user_errors(problem):
-        setup = load_setup(problem, policy, view)
+        setup = load_setup(problem, policy, view, keep_graph=keep_graph)
         folder = log_folder(log_dir)
     from ..play.server import Hub, listen, serve
     from ..play.session import PlaySession

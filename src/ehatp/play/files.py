@@ -36,12 +36,13 @@ class Setup:
 
 
 def load_setup(problem_path: Path, policy_path: Path | None, view: str | None = None,
-               *, want: dict[str, Any] | None = None) -> Setup:
+               *, want: dict[str, Any] | None = None, keep_graph: bool = True) -> Setup:
     """Return the setup of ``problem_path`` and ``policy_path`` (solved now when None) and
     the view hook ``view`` names (``none``, ``module:function``, or None: the domain's own).
     A preferences problem (``[objective] kind = "preferences"``) is searched once here with
     its graph kept (``solve(problem, keep_graph=True)``, C11), for the experimenter's profile
-    switches; without ``--policy`` that search's policy is the one played. With ``want`` (a
+    switches (not with ``keep_graph`` False: no search with ``--policy``, and no switching);
+    without ``--policy`` that search's policy is the one played. With ``want`` (a
     log's start record) the files' hashes must be the log's. :class:`InputError` (``file:
     problem; fix``) when a file cannot be read, the problem has no policy, or a hash differs."""
     try:
@@ -55,7 +56,7 @@ def load_setup(problem_path: Path, policy_path: Path | None, view: str | None = 
         raise InputError(str(problem_path), "", "is not the problem file the session played "
                          f"(its hash is {p_hash}, the log's {want.get('problem_hash')})",
                          "give the session's problem file as PROBLEM")
-    prefs = problem.objective.kind == ObjectiveKind.PREFERENCES
+    prefs = keep_graph and problem.objective.kind == ObjectiveKind.PREFERENCES
     graph = None
     if policy_path is not None:
         policy = read_policy(policy_path)
