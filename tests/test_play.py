@@ -370,3 +370,27 @@ def test_a_move_on_a_false_belief_ends_the_session_as_failed(
     view = s.participant_view()
     assert view["feed"][-1]["text"] == f"You try {failing.label}, but it cannot be done."
     assert "on(w, ot) does not hold" not in json.dumps(view) and view["moves"] == []
+
+
+def test_a_step_record_names_the_robot_move_as_an_opening_would_where_labels_are_shared(
+) -> None:
+    """Two robot methods start with ``fetch`` (the first a dead end): the log's step record
+    keeps the label as ``move`` and the move as ``[problem] after`` writes it,
+    ``R fetch [shelve]``, as ``played`` (what ``ehatp relabel --after-from`` reads); a log
+    without ``played`` (written before it was recorded) still replays."""
+    from ehatp import solve
+
+    from .test_every_policy_runs import fetching
+
+    problem = fetching()
+    policy = solve(problem).policy
+    assert policy is not None
+    src = Source("fetching.toml", "sha256:test", None, policy_hash(policy), "none")
+    s = PlaySession(problem, policy, src, session_id="f", log=MemoryLog(), clock=lambda: "T")
+    s.start()
+    s.run_robot()
+    steps = [r for r in s.log.records if r["type"] == "step"]  # type: ignore[attr-defined]
+    assert steps[0]["move"] == "fetch" and steps[0]["played"] == "R fetch [shelve]"
+    old = [{k: v for k, v in r.items() if k != "played"}
+           for r in s.log.records]  # type: ignore[attr-defined]
+    assert comparable(old) == comparable(s.log.records)  # type: ignore[attr-defined]

@@ -198,5 +198,7 @@ def _moves_of_log(problem: Path, f: Path, lines: list[str],
         agent, move = rec.get("agent"), rec.get("move")
         if not isinstance(agent, str) or not isinstance(move, str):
             die(f'{f}:line {n}: a step record without "agent" and "move"; {_LOG_FIX}')
-        out.append(((str(f), f"line {n}"), f"{agent} {move}"))
+        played = rec.get("played")  # the move as [problem] after writes it (since 0.3)
+        out.append(((str(f), f"line {n}"),
+                    played if isinstance(played, str) else f"{agent} {move}"))
     return out

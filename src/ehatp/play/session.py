@@ -64,7 +64,9 @@ LOG_TAIL = 200  # the records an experimenter view carries
 # what the robot signals at the start of a joint step (docs/play.md, "Joint steps"), by key
 SIGNALS = {"parallel": "You can act in parallel", "act": "Act if you will",
            "passive": "I will be passive this step"}
-IGNORED_IN_REPLAY = ("t", "session")  # what differs between a session and its replay
+# what differs between a session and its replay (``played`` is derived from the move, and
+# logs written before it was recorded replay all the same)
+IGNORED_IN_REPLAY = ("t", "session", "played")
 NOT_REPLAYED = ("connection",)  # records of the browser, not of the play
 
 
@@ -442,7 +444,8 @@ class PlaySession:
         ex = self.ex
         a = step.action
         witnessed = a.agent == ex.human_name or ex.sem.copresent(step.before.true)
-        self.record("step", index=step.index, agent=a.agent, move=a.label, kind=str(a.kind),
+        self.record("step", index=step.index, agent=a.agent, move=a.label, played=step.played,
+                    kind=str(a.kind),
                     cost=num(a.cost), total=num(ex.cost),
                     node=None if step.node is None else step.node.id, opening=step.opening,
                     covered=covered, replanned=step.replanned, witnessed=witnessed)
