@@ -23,6 +23,7 @@ from ehatp.search.planner import relabel
 
 from .conftest import EXAMPLES_DIR
 from .test_concurrent import JOINT, chores, replies, solved
+from .test_preferences import relabelled_as_fresh
 
 PREFS = EXAMPLES_DIR / "concurrent" / "stack-prefs.toml"
 PREFS10 = EXAMPLES_DIR / "concurrent" / "stack-prefs10.toml"
@@ -500,14 +501,7 @@ def random_agreement(seeds: Iterable[int]) -> tuple[int, int]:
         if kept.policy is None:
             continue
         solved_n += 1
-        for prof in profiles:
-            mine = dataclasses.replace(q, objective=q.objective.with_profile(prof))
-            policy = relabel(kept, prof)
-            report = ehatp.validate(mine, policy)
-            assert report.ok, (seed, prof, report.message)
-            fresh = ehatp.solve(mine, max_states=20000).policy
-            assert fresh is not None
-            assert "".join(fresh.iter_json()) == "".join(policy.iter_json()), (seed, prof)
+        for policy in relabelled_as_fresh(q, kept, seed).values():
             vectors = policy.objective["vectors"]
             at = list(policy.objective["metrics"]).index("m")
             with_metric += any(v[at] for v in vectors)

@@ -15,7 +15,7 @@ import ehatp
 from ehatp import Domain, InputError, Problem, Var
 from ehatp.formats.policy import Policy
 from ehatp.model.options import Estimate, Metric, Objective, ObjectiveKind
-from ehatp.search.planner import relabel
+from ehatp.search.planner import Result, relabel
 
 from .conftest import EXAMPLES_DIR as EXAMPLES
 from .test_concurrent import JOINT, chores, drawer, replies, solved, two_hands
@@ -27,6 +27,23 @@ PROFILES = {
     "effort": (Metric.EFFORT, Metric.COMMUNICATIONS),
     "quiet": (Metric.COMMUNICATIONS, Metric.MAKESPAN),
 }
+
+
+def relabelled_as_fresh(q: Problem, kept: Result, seed: int) -> dict[str, Policy]:
+    """C11: ``kept`` (``q`` solved with its graph kept) relabelled for each of ``q``'s
+    profiles: each policy valid for ``q`` with that profile chosen and the JSON of a fresh
+    solve of it (``seed`` names the problem in a failure). Return the policies by profile."""
+    out = {}
+    for name in q.objective.profiles:
+        mine = dataclasses.replace(q, objective=q.objective.with_profile(name))
+        policy = relabel(kept, name)
+        report = ehatp.validate(mine, policy)
+        assert report.ok, (seed, name, report.message)
+        fresh = ehatp.solve(mine, max_states=20000).policy
+        assert fresh is not None
+        assert "".join(fresh.iter_json()) == "".join(policy.iter_json()), (seed, name)
+        out[name] = policy
+    return out
 
 
 def prefer(p: Problem, profile: str, estimate: Estimate = Estimate.WORST_CASE) -> Problem:
@@ -348,12 +365,5 @@ def test_random_joint_problems_relabel_exactly_and_validate() -> None:
         if kept.policy is None:
             continue
         solved_n += 1
-        for name in profiles:
-            mine = dataclasses.replace(q, objective=q.objective.with_profile(name))
-            policy = relabel(kept, name)
-            report = ehatp.validate(mine, policy)
-            assert report.ok, (seed, name, report.message)
-            fresh = ehatp.solve(mine, max_states=20000).policy
-            assert fresh is not None
-            assert "".join(fresh.iter_json()) == "".join(policy.iter_json()), (seed, name)
+        relabelled_as_fresh(q, kept, seed)
     assert solved_n > 10

@@ -7,13 +7,15 @@ the derivation is in each test's docstring."""
 from __future__ import annotations
 
 import dataclasses
+import importlib.util
 import json
+from pathlib import Path
 from typing import Any
 
 import pytest
 
 import ehatp
-from ehatp import Domain, Problem, Var
+from ehatp import Problem
 from ehatp.errors import ExecutionError
 from ehatp.formats.policy import Policy
 from ehatp.model.options import Estimate
@@ -26,32 +28,18 @@ from .test_concurrent import JOINT, chores, two_hands
 from .test_execute import lines, session
 from .test_preferences import PROFILES, helper, p2, prefer
 
+WARMUP = Path(__file__).parent / "data" / "warmup.py"  # the domain
+
 
 def warmup() -> Problem:
     """:func:`tests.test_preferences.helper` after a first step: the robot must first warm
     ``b`` (``warm(b)``, its task ``prep``, before ``work``), and the human can put ``b`` only
     once it is warm (``hput(x)`` needs ``ready(x)``). Always co-present, the human first."""
-    d = Domain("warmup", robot="R", human="H")
-    thing = d.type("thing")
-    x = Var("x", thing)
-    a, b = d.constant("a", thing), d.constant("b", thing)
-    placed, held = d.predicate("placed", x), d.predicate("held", x)
-    ready = d.predicate("ready", x)
-    warm = d.robot.action("warm", x, pre=~ready(x), effects=[ready(x)])
-    put = d.robot.action("put", x, pre=~placed(x), effects=[placed(x)], resources=[x])
-    grab = d.robot.action("grab", x, pre=~placed(x) & ~held(x), effects=[held(x)],
-                          resources=[x])
-    drop = d.robot.action("drop", x, pre=held(x), effects=[~held(x), placed(x)],
-                          resources=[x])
-    prep = d.robot.task("prep")
-    d.robot.method(prep, "warm", subtasks=[warm(b)])
-    work = d.robot.task("work")
-    d.robot.method(work, "share", subtasks=[put(a)])
-    d.robot.method(work, "all", subtasks=[grab(b), put(a), drop(b)])
-    hput = d.human.action("hput", x, pre=ready(x) & ~placed(x) & ~held(x),
-                          effects=[placed(x)], resources=[x])
-    task = d.human.task("help", x, done=placed(x))
-    d.human.method(task, "put", subtasks=[hput(x)])
+    spec = importlib.util.spec_from_file_location("warmup_domain", WARMUP)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    d = module.domain
     return Problem(name="warmup", domain=d, objects={}, init=frozenset(),
                    robot_agenda=(("prep", ()), ("work", ())),
                    human_agenda=(("help", ("b",)),), steps=JOINT)

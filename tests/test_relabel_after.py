@@ -23,31 +23,7 @@ from ehatp.cli.app import app
 from ehatp.formats.policy import Policy
 from ehatp.run.walk import walk_policy
 
-DOMAIN = '''\
-from ehatp import Domain, Var
-
-domain = Domain("warmup", robot="R", human="H")
-thing = domain.type("thing")
-x = Var("x", thing)
-a, b = domain.constant("a", thing), domain.constant("b", thing)
-placed, held = domain.predicate("placed", x), domain.predicate("held", x)
-ready = domain.predicate("ready", x)
-warm = domain.robot.action("warm", x, pre=~ready(x), effects=[ready(x)])
-put = domain.robot.action("put", x, pre=~placed(x), effects=[placed(x)], resources=[x])
-grab = domain.robot.action("grab", x, pre=~placed(x) & ~held(x), effects=[held(x)],
-                           resources=[x])
-drop = domain.robot.action("drop", x, pre=held(x), effects=[~held(x), placed(x)],
-                           resources=[x])
-prep = domain.robot.task("prep")
-domain.robot.method(prep, "warm", subtasks=[warm(b)])
-work = domain.robot.task("work")
-domain.robot.method(work, "share", subtasks=[put(a)])
-domain.robot.method(work, "all", subtasks=[grab(b), put(a), drop(b)])
-hput = domain.human.action("hput", x, pre=ready(x) & ~placed(x) & ~held(x),
-                           effects=[placed(x)], resources=[x])
-task = domain.human.task("help", x, done=placed(x))
-domain.human.method(task, "put", subtasks=[hput(x)])
-'''
+DOMAIN = (Path(__file__).parent / "data" / "warmup.py").read_text(encoding="utf-8")
 
 PROBLEM = '''\
 [problem]
