@@ -40,7 +40,10 @@ import ehatp  # noqa: E402
 from ehatp import StepMode, Steps  # noqa: E402
 from ehatp.model.options import Metric, Objective, ObjectiveKind  # noqa: E402
 from ehatp.run.executor import Executor  # noqa: E402
-from ehatp.run.walk import walk_from  # noqa: E402
+from ehatp.run.walk import (
+    positions,  # noqa: E402
+    walk_from,  # noqa: E402
+)
 
 ROOT = Path(__file__).resolve().parent.parent / "examples"
 INSTANCES = [("P1", "cubes/p1"), ("P2", "cubes/p2"), ("P3", "cubes/p3"), ("P4", "cubes/p4"),
@@ -55,26 +58,7 @@ PROFILES = {"hurry": (Metric.MAKESPAN, Metric.HUMAN_EFFORT),
 def step_starts(problem: ehatp.Problem, policy: ehatp.Policy, cap: int) -> list[Executor]:
     """Executors at the step starts of ``policy`` (past the opening, before the goal), every
     branch walked depth first, at most ``cap``."""
-    start = Executor(problem, policy)
-    start.replay_opening()
-    out: list[Executor] = []
-    stack = [start]
-    while stack and len(out) < cap:
-        ex = stack.pop()
-        if ex.done:
-            continue
-        if not ex.state.pending:
-            out.append(ex.copy())
-        if ex.next_robot_action() is not None:
-            ex.robot_action_done()
-            stack.append(ex)
-            continue
-        assert ex.node is not None
-        for label in [m.action for m in ex.node.moves]:
-            nxt = ex.copy()
-            nxt.observe_human_action(label)
-            stack.append(nxt)
-    return out
+    return positions(Executor(problem, policy), cap=cap, step_starts=True)
 
 
 def same(a: ehatp.Policy, b: ehatp.Policy) -> bool:

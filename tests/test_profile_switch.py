@@ -20,7 +20,7 @@ from ehatp.errors import ExecutionError
 from ehatp.formats.policy import Policy
 from ehatp.model.options import Estimate
 from ehatp.run.executor import Executor
-from ehatp.run.walk import walk_from, walk_policy
+from ehatp.run.walk import positions, walk_from, walk_policy
 from ehatp.search import planner
 from ehatp.search.planner import Result
 
@@ -238,11 +238,7 @@ def test_switching_at_every_step_start_gives_the_fresh_solve_from_there(name: st
                      for new in PROFILES}
             where = {new: state_nodes(prefer(PROBLEMS[name](), new, estimate), pol)
                      for new, pol in fresh.items() if pol is not None}
-            stack = [Executor(p, r.policy)]
-            while stack:
-                ex = stack.pop()
-                if ex.done:
-                    continue
+            for ex in positions(Executor(p, r.policy)):
                 for new in PROFILES:
                     other = ex.copy()
                     if ex.state.pending:  # mid-step: refused
@@ -257,15 +253,6 @@ def test_switching_at_every_step_start_gives_the_fresh_solve_from_there(name: st
                         pol = fresh[new]
                         assert pol is not None
                         assert shape(policy) == shape(pol, at)
-                if ex.next_robot_action() is not None:
-                    ex.robot_action_done()
-                    stack.append(ex)
-                    continue
-                assert ex.node is not None
-                for label in [m.action for m in ex.node.moves]:
-                    nxt = ex.copy()
-                    nxt.observe_human_action(label)
-                    stack.append(nxt)
     assert switches >= 2 * len(PROFILES) ** 2
 
 

@@ -64,6 +64,36 @@ def walk_policy(problem: Problem, policy: Policy, *, cap: int = DEFAULT_CAP) -> 
     return walk_from(start, cap=cap)
 
 
+def positions(start: Executor, *, cap: int = DEFAULT_CAP,
+              step_starts: bool = False) -> list[Executor]:
+    """Return an executor at each position of every branch of the policy ``start`` follows,
+    from where ``start`` is (its opening replayed), depth first, the goal excluded: at most
+    ``cap`` (a position two branches reach is listed once per branch). In joint steps a
+    position is a step's start, or its middle (``state.pending``: the reply due), which
+    ``step_starts`` leaves out. ``start`` itself does not move. For checks made wherever an
+    execution may stand, e.g. a profile switch (C11)."""
+    first = start.copy()
+    first.replay_opening()
+    out: list[Executor] = []
+    stack = [first]
+    while stack and len(out) < cap:
+        ex = stack.pop()
+        if ex.done:
+            continue
+        if not (step_starts and ex.state.pending):
+            out.append(ex.copy())
+        if ex.next_robot_action() is not None:
+            ex.robot_action_done()
+            stack.append(ex)
+            continue
+        assert ex.node is not None
+        for label in [m.action for m in ex.node.moves]:
+            nxt = ex.copy()
+            nxt.observe_human_action(label)
+            stack.append(nxt)
+    return out
+
+
 def walk_from(start: Executor, *, cap: int = DEFAULT_CAP) -> WalkReport:
     """Return how the policy ``start`` follows runs on every branch from where ``start`` is
     (e.g. after :meth:`Executor.switch_profile`, C11), as :func:`walk_policy` walks a policy
@@ -294,4 +324,5 @@ def _failure(n: int, path: list[str], error: str) -> str:
     return f"branch {n} ({moves}): {error}"
 
 
-__all__ = ["DEFAULT_CAP", "WalkReport", "tick_py_trees", "walk_from", "walk_policy"]
+__all__ = ["DEFAULT_CAP", "WalkReport", "positions", "tick_py_trees", "walk_from",
+           "walk_policy"]
