@@ -21,6 +21,9 @@ import dataclasses
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
+
+import pytest
 
 import ehatp
 from ehatp import Policy, Problem, Result
@@ -102,6 +105,18 @@ EXAMPLES: tuple[Example, ...] = (
     Example("sally-anne/defer", 15, 0, 4, 1),
     Example("sally-anne/inform", 15, 1, 4, 1),
 )
+
+BRANCHES_FAST = 500
+"""Tests that run every branch of every example mark slow the examples of more leaves (the
+ten-cube stacking ones): they run in CI, and `make test-fast` stays a quick loop."""
+
+
+def every_example_by_branch() -> list[Any]:
+    """The examples as parameters of a test that runs each branch, ``slow`` past
+    :data:`BRANCHES_FAST` leaves."""
+    return [pytest.param(e, id=str(e), marks=[pytest.mark.slow] if e.leaves > BRANCHES_FAST
+                         else []) for e in EXAMPLES]
+
 
 TABLE1: tuple[Example, ...] = tuple(e for e in EXAMPLES if e.table1 is not None)
 CUBES_TABLE1: tuple[Example, ...] = tuple(e for e in TABLE1 if e.folder == "cubes")

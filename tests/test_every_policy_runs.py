@@ -17,7 +17,7 @@ from ehatp.model.problem import Problem
 from ehatp.run.executor import Executor
 from ehatp.run.walk import tick_py_trees, walk_policy
 
-from .conftest import EXAMPLES, Example, solved
+from .conftest import EXAMPLES, Example, every_example_by_branch, solved
 from .scenarios import problem as scenario
 from .test_intentions import car_problem, shelf_problem
 
@@ -30,7 +30,7 @@ def test_every_shipped_example_walks_to_the_goal_on_every_branch(example: Exampl
     assert not report.capped and report.branches == policy.leaves
 
 
-@pytest.mark.parametrize("example", EXAMPLES, ids=str)
+@pytest.mark.parametrize("example", every_example_by_branch())
 def test_every_shipped_example_s_behaviour_tree_ticks_to_the_goal(example: Example) -> None:
     pytest.importorskip("py_trees", reason="py_trees is not installed (pip install 'ehatp[bt]')")
     problem, policy = solved(example)

@@ -14,7 +14,7 @@ from ehatp.cli.app import app as ehatp_app
 from ehatp.formats.policy import PathStep, Policy
 from ehatp.run.executor import ExecutionError, Executor, PolicyMismatch, UncoveredHumanAction
 
-from .conftest import EXAMPLES, EXAMPLES_DIR, Example, solved_v2
+from .conftest import EXAMPLES_DIR, Example, every_example_by_branch, solved_v2
 
 CUBES = EXAMPLES_DIR / "cubes"
 P2, QUAL, QUAL_ASK = CUBES / "p2.toml", CUBES / "qualitative.toml", CUBES / "qualitative-ask.toml"
@@ -320,7 +320,7 @@ def test_policy_for_another_problem_is_bad_input(tmp_path: Path) -> None:
 
 # -- the API over every example --------------------------------------------------------------
 
-@pytest.mark.parametrize("example", EXAMPLES, ids=str)
+@pytest.mark.parametrize("example", every_example_by_branch())
 def test_executor_follows_every_branch_of_every_example(example: Example) -> None:
     problem, policy = solved_v2(example)  # every example has a policy
     for branch in policy.branches():
