@@ -251,8 +251,12 @@ def run(seeds: Iterable[int], *, jobs: int = 1,
     if jobs <= 1 or len(seeds) <= 1:
         collect(one(s) for s in seeds)
     else:
-        # fork: the children share the parent's imports; one seed per task keeps load even
-        ctx = multiprocessing.get_context("fork")
+        # forkserver, not fork: a process with threads (a test run after Ray or Dask, a
+        # notebook) can fork a child that blocks for ever on a lock another thread held; the
+        # server forks from a clean process with the planner imported. One seed per task
+        # keeps the load even.
+        ctx = multiprocessing.get_context("forkserver")
+        ctx.set_forkserver_preload([__name__])
         with ctx.Pool(jobs) as pool:
             collect(pool.imap_unordered(one, seeds, chunksize=1))
     return sorted(results, key=lambda o: o.seed)
