@@ -494,14 +494,11 @@ def random_agreement(seeds: Iterable[int]) -> tuple[int, int]:
         profiles = {f"p{i}": tuple(rng.sample(metrics, rng.randint(1, 3))) + ("m",)
                     for i in range(2)}
         profiles = {k: tuple(dict.fromkeys(v)) for k, v in profiles.items()}
-        q = dataclasses.replace(p, objective=Objective(
-            ObjectiveKind.PREFERENCES, profile="p0", profiles=profiles,
-            estimate=rng.choice(list(Estimate))))
-        kept = ehatp.solve(q, keep_graph=True, max_states=20000)
-        if kept.policy is None:
+        policies = relabelled_as_fresh(p, profiles, rng.choice(list(Estimate)), seed)
+        if policies is None:
             continue
         solved_n += 1
-        for policy in relabelled_as_fresh(q, kept, seed).values():
+        for policy in policies.values():
             vectors = policy.objective["vectors"]
             at = list(policy.objective["metrics"]).index("m")
             with_metric += any(v[at] for v in vectors)

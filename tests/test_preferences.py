@@ -15,7 +15,7 @@ import ehatp
 from ehatp import Domain, InputError, Problem, Var
 from ehatp.formats.policy import Policy
 from ehatp.model.options import Estimate, Metric, Objective, ObjectiveKind
-from ehatp.search.planner import Result, relabel
+from ehatp.search.planner import relabel
 
 from .conftest import EXAMPLES_DIR as EXAMPLES
 from .test_concurrent import JOINT, chores, drawer, replies, solved, two_hands
@@ -29,12 +29,20 @@ PROFILES = {
 }
 
 
-def relabelled_as_fresh(q: Problem, kept: Result, seed: int) -> dict[str, Policy]:
-    """C11: ``kept`` (``q`` solved with its graph kept) relabelled for each of ``q``'s
-    profiles: each policy valid for ``q`` with that profile chosen and the JSON of a fresh
-    solve of it (``seed`` names the problem in a failure). Return the policies by profile."""
+def relabelled_as_fresh(p: Problem, profiles: dict[str, tuple[str, ...]],
+                        estimate: Estimate, seed: int) -> dict[str, Policy] | None:
+    """C11: ``p`` with ``kind = "preferences"`` over ``profiles`` (the first chosen), solved
+    once with its graph kept, then relabelled for each profile: each policy valid for the
+    problem with that profile chosen and the JSON of a fresh solve of it (``seed`` names the
+    problem in a failure). Return the policies by profile, or None when ``p`` has none."""
+    q = dataclasses.replace(p, objective=Objective(
+        ObjectiveKind.PREFERENCES, profile=next(iter(profiles)), profiles=profiles,
+        estimate=estimate))
+    kept = ehatp.solve(q, keep_graph=True, max_states=20000)
+    if kept.policy is None:
+        return None
     out = {}
-    for name in q.objective.profiles:
+    for name in profiles:
         mine = dataclasses.replace(q, objective=q.objective.with_profile(name))
         policy = relabel(kept, name)
         report = ehatp.validate(mine, policy)
@@ -358,12 +366,6 @@ def test_random_joint_problems_relabel_exactly_and_validate() -> None:
         metrics = list(Metric)
         profiles = {f"p{i}": tuple(rng.sample(metrics, rng.randint(1, len(metrics))))
                     for i in range(3)}
-        q = dataclasses.replace(p, objective=Objective(
-            ObjectiveKind.PREFERENCES, profile="p0", profiles=profiles,
-            estimate=rng.choice(list(Estimate))))
-        kept = ehatp.solve(q, keep_graph=True, max_states=20000)
-        if kept.policy is None:
-            continue
-        solved_n += 1
-        relabelled_as_fresh(q, kept, seed)
+        if relabelled_as_fresh(p, profiles, rng.choice(list(Estimate)), seed) is not None:
+            solved_n += 1
     assert solved_n > 10
