@@ -20,7 +20,7 @@ from ehatp.experiments.examples import example, examples_dir
 from ehatp.formats.lifted import expanded
 from ehatp.formats.policy import Policy
 
-from .conftest import TABLE1
+from .conftest import TABLE1, big_problem
 
 CUBES = examples_dir() / "cubes"
 P1 = CUBES / "p1.toml"
@@ -112,14 +112,14 @@ def test_unsolvable_problem_exits_1_with_reason(tmp_path: Path) -> None:
 
 
 def test_timeout_exits_1_with_partial_statistics(tmp_path: Path) -> None:
-    r = invoke("solve", P1, "--timeout", "0", "--out", tmp_path / "t.json")
+    r = invoke("solve", big_problem(tmp_path), "--timeout", "0", "--out", tmp_path / "t.json")
     assert r.exit_code == 1
     assert "time limit" in r.stdout and "generated" in r.stdout
 
 
 def test_state_limit_keeps_best_policy_flagged_not_optimal(tmp_path: Path) -> None:
     out = tmp_path / "p6.json"
-    r = invoke("solve", CUBES / "p6.toml", "--max-states", "600", "--no-symmetry", "--out", out)
+    r = invoke("solve", CUBES / "p6.toml", "--max-states", "300", "--no-symmetry", "--out", out)
     assert r.exit_code == 1
     assert "state limit" in r.stdout
     if out.exists():  # whether a policy is known by then is the planner's business

@@ -22,16 +22,9 @@ from ehatp.model.problem import parse_size
 from ehatp.search import andor, values
 from ehatp.search.limits import Budget, LimitReached
 
+from .conftest import big_problem
+
 CUBES = Path(__file__).resolve().parents[1] / "examples" / "cubes"
-# about 200k distinct states and a few seconds of search: far more than the limits below allow
-# (without the symmetry reduction, docs/semantics.md §3, which solves it in a few thousand)
-BIG = GridPoint("cubes", 8, cubes=6, boxes=3, transparent=False)
-
-
-def big_problem(tmp_path: Path) -> Path:
-    path = tmp_path / f"{BIG.name}.toml"
-    path.write_text(BIG.toml() + "\n[limits]\nsymmetry = false\n", encoding="utf-8")
-    return path
 
 
 def test_timeout_stops_the_search_of_a_big_problem(tmp_path: Path) -> None:

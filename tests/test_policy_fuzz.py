@@ -88,6 +88,8 @@ def test_a_mutated_policy_is_refused_in_one_line_or_read_whole(problem: Path, tm
 @pytest.mark.parametrize(("text", "needle"), [
     ('"worst_case": Infinity', "Infinity is not a number JSON allows"),
     ('"worst_case": NaN', "NaN is not a number JSON allows"),
+    # a number too large for a float, which Python's reader turns into infinity
+    ('"worst_case": 1e999', "1e999 is too large a number for a policy"),
     ('"objective": true', "objective: must be an object"),
 ])
 def test_numbers_json_does_not_allow_and_wrong_shapes_are_refused_before_reading(

@@ -21,7 +21,7 @@ def test_a_result_prints_its_status_and_policy_in_one_short_line() -> None:
     assert len(text) < 200 and "\n" not in text
     assert text.startswith("Result(status='solved', optimal=True, policy=Policy('P2', "
                            "domain='cubes', version=3, nodes=")
-    assert "leaves=6, cost=13)" in text and "distinct=67" in text
+    assert "leaves=6, cost=13)" in text and "distinct=60" in text
 
 
 def test_a_stopped_result_prints_why() -> None:

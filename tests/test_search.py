@@ -8,7 +8,7 @@ from pathlib import Path
 import ehatp
 from ehatp import Policy
 
-from .conftest import EXAMPLES_DIR, example
+from .conftest import EXAMPLES_DIR, big_problem, example
 
 CUBES = EXAMPLES_DIR / "cubes"
 
@@ -20,8 +20,8 @@ def test_state_limit_stops_cleanly_with_partial_statistics() -> None:
     assert "state limit" in r.reason
 
 
-def test_time_limit_stops_cleanly() -> None:
-    r = ehatp.solve(ehatp.load(CUBES / "p6.toml"), timeout=0.0)
+def test_time_limit_stops_cleanly(tmp_path: Path) -> None:
+    r = ehatp.solve(ehatp.load(big_problem(tmp_path)), timeout=0.0)
     assert r.status == "timeout" and "time limit" in r.reason
     assert r.stats["distinct"] >= 1 and "expanded" in r.stats
 

@@ -130,6 +130,10 @@ def solve_cmd(
         "--expand", help="Write the policy over the real objects (format version 2) even when "
                          "the search ran over canonical states, where the lifted policy "
                          "(version 3) is written by default (docs/policy-format.md).")] = False,
+    no_focus: Annotated[bool, typer.Option(
+        "--no-focus", help="Expand every state whose g + h is at most the optimum, as 0.2 "
+                           "did, not only the best partial policy's tips: the same policy, "
+                           "more states (docs/semantics.md §7, \"Search\").")] = False,
 ) -> None:
     """Plan a robot policy, optimal under the problem's objective, and write it as JSON.
 
@@ -159,7 +163,8 @@ def solve_cmd(
             with user_errors(problem):
                 result = solve(prob, max_states=max_states, max_depth=max_depth,
                                progress=live, budget=budget,
-                               symmetry=False if no_symmetry else None, expand=expand)
+                               symmetry=False if no_symmetry else None, expand=expand,
+                               focus=not no_focus)
             result, written = _write(result, target, budget)
     finally:
         if live is not None:

@@ -430,7 +430,7 @@ class Policy:
         except UnicodeDecodeError:
             raise InputError(name, "", "not a text file", POLICY_FIX) from None
         try:
-            raw = json.loads(text, parse_constant=_no_constant)
+            raw = json.loads(text, parse_constant=_no_constant, parse_float=_finite)
         except json.JSONDecodeError as e:
             raise InputError(name, f"{e.lineno}:{e.colno}", f"not valid JSON ({e.msg})",
                              POLICY_FIX) from None
@@ -565,6 +565,15 @@ def malformed(raw: Any) -> tuple[str, str] | None:
             if not isinstance(m, dict):
                 return f"nodes[{i}].moves[{j}]", f"a move must be an object, got {m!r:.40}"
     return None
+
+
+def _finite(text: str) -> float:
+    """Return the number ``text``, refusing one too large for a float (``1e999``), which
+    Python's JSON reader would otherwise read as infinity."""
+    x = float(text)
+    if x in (float("inf"), float("-inf")):
+        raise ValueError(f"{text[:40]} is too large a number for a policy")
+    return x
 
 
 def _no_constant(name: str) -> Any:

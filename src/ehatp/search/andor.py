@@ -48,6 +48,7 @@ from ..model.grounded import Grounded
 from ..model.options import ObjectiveKind
 from ..model.problem import Cost
 from . import heuristic as _heuristic
+from .bounds import Bounds
 from .graph import (
     DEAD,
     EXPANDED,
@@ -90,7 +91,7 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
            max_depth: int | None = None, progress: Progress | None = None,
            max_memory: int | None = None, budget: Budget | None = None,
            stats: Stats | None = None, symmetry: bool = False,
-           heuristic: bool | None = None) -> SearchOutcome:
+           heuristic: bool | None = None, focus: bool = True) -> SearchOutcome:
     """§7: explore from the root until the optimum is proven (worst case), everything
     reachable is explored (expected cost), or a limit is reached; then the values.
 
@@ -102,7 +103,12 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
     index or name order makes that unsound the search stops with status
     ``"symmetry-unsafe"`` (the planner then solves again without it). ``heuristic`` (default:
     on) orders a worst-case search by ``g + h`` (:mod:`.heuristic`); the policy is the same
-    either way, fewer states are expanded with it.
+    either way, fewer states are expanded with it. ``focus`` (default: on; worst case with
+    the heuristic only) expands the tips of the best partial policy instead
+    (:meth:`_Search._focus`, :mod:`.bounds`): the same policy again, far fewer states. A
+    state cut by the depth limit (§6: the depth of a state is over the paths found, which the
+    focused search finds fewer of), or a root proven to have no policy, sends the work back
+    to the search by ``f``, whose whole explored graph says why (:mod:`.diagnose`).
 
     In GTPyhop-style pseudo-code (``V``: the worst-case values kept up to date, the module's
     docstring proves the stopping rule)::
@@ -136,11 +142,16 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
     collecting = gc.isenabled()
     gc.disable()
     try:
-        run = _Search(grounded, budget, stats,
-                      limits.max_states if max_states is None else max_states,
-                      limits.max_depth if max_depth is None else max_depth,
-                      symmetry=symmetry, heuristic=_heuristic.enabled(heuristic))
+        states_cap = limits.max_states if max_states is None else max_states
+        depth_cap = limits.max_depth if max_depth is None else max_depth
+        run = _Search(grounded, budget, stats, states_cap, depth_cap, symmetry=symmetry,
+                      heuristic=_heuristic.enabled(heuristic), focus=focus)
         run.run()
+        if run.unfocus:  # no policy, or a depth cut: the search by f explains it (§6)
+            stats.restart()
+            run = _Search(grounded, budget, stats, states_cap, depth_cap, symmetry=symmetry,
+                          heuristic=_heuristic.enabled(heuristic), focus=False)
+            run.run()
     finally:
         if collecting:
             gc.enable()
@@ -154,7 +165,7 @@ class _Search:
     with its stopping rule and limits, then the values."""
 
     def __init__(self, grounded: Grounded, budget: Budget, stats: Stats, max_states: int,
-                 max_depth: int, *, symmetry: bool, heuristic: bool) -> None:
+                 max_depth: int, *, symmetry: bool, heuristic: bool, focus: bool) -> None:
         self.budget, self.stats = budget, stats
         self.max_states, self.max_depth = max_states, max_depth
         # worst case: stop as soon as the optimum is proven; expected cost: explore everything
@@ -177,6 +188,10 @@ class _Search:
         self.values: Values | None = None
         self.optimal = False
         self.live: LiveWorst | None = None  # worst-case values, kept from the first goal on
+        # the focused search's lower bounds (worst case with the heuristic), and whether a
+        # depth cut sends the work back to the search by f
+        self.bounds = Bounds(self.graph, self.hfn) if focus and self.hfn is not None else None
+        self.unfocus = False
 
     def _opening(self, grounded: Grounded) -> EState:
         """Return the root's state: the initial state after the problem's opening moves
@@ -208,8 +223,10 @@ class _Search:
         """Explore, then compute the values; a limit met in either, or a
         :class:`MemoryError`, is a clean stop (no values from a half-updated graph)."""
         try:
-            if self._explore():
+            if self._focus() if self.bounds is not None else self._explore():
                 self._end_of_graph()
+            if self.unfocus:
+                return
             self._values()
         except LimitReached as e:
             self.status, self.reason, self.values, self.optimal = e.status, e.reason, None, False
@@ -243,6 +260,55 @@ class _Search:
                 return False
         return True
 
+    def _focus(self) -> bool:
+        """§7, "Search", focused: expand the tips of the best partial policy
+        (:mod:`.bounds`), a batch at a time, until it has none (True: the root's bound is
+        then its value, or infinite once everything reachable is expanded) or a limit ends
+        the search (False). In GTPyhop-style pseudo-code::
+
+            focus(problem):
+                low(root) = h(root)
+                while the best partial policy has tips:
+                    for each tip n: expand n (new children: low = h)
+                    revise the bounds (they only rise)
+                return the root's bound is its value
+
+        Why the policy is the one the search by ``f`` chooses: when the best partial policy
+        has no tip, each node it reaches has its value as bound (an explored sub-policy
+        costs it, and no policy costs less); a robot option it does not follow has
+        ``cost + low(child)`` above the node's value, so it is worse whatever lies below;
+        the options it follows are exactly those of the node's value. Those are the nodes
+        and options the choices read (:func:`~.values.compute_values`), all explored, with
+        the same values and the same sub-policies for the tie keys. Every tip expanded has
+        ``g + h <= low(root) <= V``, so the states expanded are among those the search by
+        ``f`` expands."""
+        gr, bounds, root = self.graph, self.bounds, self.root
+        assert bounds is not None
+        scratch: list[Entry] = []
+        while True:
+            tips, stale = bounds.walk(root)
+            if stale:  # bring the best partial policy up to date first
+                bounds.revise(stale)
+                continue
+            if not tips:
+                if not gr.solved[root]:  # proven: no policy; the search by f says why
+                    self.unfocus = True
+                    return False
+                return True
+            self.stats.frontier = len(tips)
+            for n in tips:
+                if self._limit_reached():
+                    return False
+                _expand(gr, n, scratch, self.stats, self.max_depth, None, self.max_states)
+                scratch.clear()
+                if gr.depth_cut:
+                    self.unfocus = True
+                    return False
+                if self._after_expansion(n):
+                    return False
+                bounds.added()
+            bounds.revise(tips)
+
     def _proven(self, f: Bound) -> bool:
         """The stopping rule (the module's docstring): every node with a smaller ``f`` is
         expanded, so the optimum is proven when the root's value is below ``f``."""
@@ -255,7 +321,8 @@ class _Search:
         """Whether time, memory (with what must follow the search) or ``max_states`` stop the
         search before the next expansion (§7, "Search"; :mod:`.limits`)."""
         stats = self.stats
-        stats.frontier = len(self.heap)
+        if self.bounds is None:
+            stats.frontier = len(self.heap)
         stop = self.budget.search_should_stop(stats.distinct,
                                               bool(self.graph.solved[self.root]))
         if stop is not None:
@@ -279,7 +346,7 @@ class _Search:
             return self._stop(SolveStatus.SYMMETRY_UNSAFE, sem.unsafe)
         if self.live is not None:
             self.live.expanded(n)
-        elif self.early_stop and gr.status[n] == GOAL:
+        elif self.early_stop and gr.status[n] == GOAL and self.bounds is None:
             # from the first goal on, not only once the root is solved: a search ordered
             # by g + h often solves the root by its very last expansions
             self.budget.phase = "search (first worst-case pass)"

@@ -162,13 +162,14 @@ class _Settings:
     symmetry: bool
     heuristic: bool | None
     expand: bool = False
+    focus: bool = True
 
 
 def solve(problem: Problem, *, timeout: float | None = None, max_states: int | None = None,
           max_depth: int | None = None, progress: Progress | None = None,
           max_memory: int | None = None, budget: Budget | None = None,
           symmetry: bool | None = None, heuristic: bool | None = None,
-          expand: bool = False, keep_graph: bool = False) -> Result:
+          expand: bool = False, keep_graph: bool = False, focus: bool = True) -> Result:
     """Plan a robot policy for ``problem``, optimal under ``problem.objective``
     (docs/semantics.md §7: worst-case by default, or expected cost).
 
@@ -188,7 +189,9 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
     by name or index order, or, expanding, a move that does not map back) the problem is solved
     again without it. ``heuristic`` (default:
     on) orders a worst-case search by a lower bound (:mod:`.heuristic`): fewer states, the
-    same policy.
+    same policy. ``focus`` (default: on) expands, with that bound, only the tips of the best
+    partial policy (docs/semantics.md §7, "Search"; :mod:`.bounds`): far fewer states again,
+    the same policy; off, every state whose ``g + h`` is at most the optimum is expanded.
 
     ``keep_graph`` keeps the explored graph in ``Result.graph`` (a :class:`Relabeler`) when
     the objective is ``"preferences"`` (C11), to relabel it for another profile.
@@ -212,7 +215,7 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
     if isinstance(grounded, Result):
         return grounded
     settings = _Settings(max_states, max_depth, _symmetry.enabled(symmetry, problem.limits),
-                         heuristic, expand)
+                         heuristic, expand, focus)
     try:
         out = _search(grounded, budget, live, settings)
     except LimitReached as e:  # before the first state: looking for symmetry, the bound
@@ -231,7 +234,7 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
         if isinstance(got, str):  # not expected: solve without symmetry
             live.restart()
             return solve(problem, max_states=max_states, max_depth=max_depth, budget=budget,
-                         symmetry=False, heuristic=heuristic, expand=expand)
+                         symmetry=False, heuristic=heuristic, expand=expand, focus=focus)
         if isinstance(got, LimitReached) and out.status == SolveStatus.SOLVED:
             # §7: the search is finished: what it proved is kept, whatever stopped the rest
             policy = lifted if lifted is not None else _proven(problem, out, public)
@@ -291,11 +294,12 @@ def _search(grounded: Grounded, budget: Budget, live: Stats,
     (§3, "Symmetry": a decision taken by name or index order)."""
     out = search(grounded, max_states=settings.max_states, max_depth=settings.max_depth,
                  budget=budget, stats=live, symmetry=settings.symmetry,
-                 heuristic=settings.heuristic)
+                 heuristic=settings.heuristic, focus=settings.focus)
     if out.status == SolveStatus.SYMMETRY_UNSAFE:
         live.restart()
         out = search(grounded, max_states=settings.max_states, max_depth=settings.max_depth,
-                     budget=budget, stats=live, heuristic=settings.heuristic)
+                     budget=budget, stats=live, heuristic=settings.heuristic,
+                     focus=settings.focus)
     return out
 
 
@@ -366,7 +370,8 @@ def _hidden_choice(problem: Problem, budget: Budget, settings: _Settings) -> str
     seen = replace(problem, human=replace(problem.human, intentions=Intentions.VISIBLE))
     try:
         other = solve(seen, max_states=settings.max_states, max_depth=settings.max_depth,
-                      budget=budget, heuristic=settings.heuristic, expand=True)
+                      budget=budget, heuristic=settings.heuristic, expand=True,
+                      focus=settings.focus)
     except LimitReached:
         return ""
     if other.policy is None:

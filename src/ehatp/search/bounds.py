@@ -1,0 +1,306 @@
+"""Lower bounds on the worst-case values of a growing graph, and the tips of the best partial
+policy they pick (docs/semantics.md §7, "Search": the focused search).
+
+Every node of the explored graph has a lower bound ``low`` on its worst-case value: an open
+node its heuristic ``h`` (:mod:`.heuristic`), a goal 0, a dead end infinity, an expanded node
+the least fixpoint of the min/max equations of §7 over its children's bounds, exactly as
+:func:`~.values.knuth` computes values with the open nodes' ``h`` as their values. Where no
+open node remains below a node, its bound is its value on the explored graph.
+
+The *best partial policy* follows, from the root, every branch of a human node and every
+option of a robot node whose ``cost + low(child)`` equals the node's bound (all the tied ones);
+its *tips* are the open nodes it reaches. Expanding a tip replaces its ``h`` by its equation,
+which is at least ``h`` (``h`` is consistent: ``h(n) <= cost + h(c)`` on every edge), so
+bounds only rise: the least fixpoint is monotone in the open nodes' values, and a rise travels
+up only through the nodes whose value it supported (:meth:`Bounds.revise`).
+"""
+
+from __future__ import annotations
+
+import heapq
+
+from ..epistemic.state import ROBOT
+from ..model.problem import Cost
+from .graph import DEAD, EXPANDED, GOAL, OPEN, Graph
+from .heuristic import Bound, Heuristic
+
+INF = float("inf")
+
+
+class Bounds:
+    """The lower bounds ``low`` of every node of ``gr`` (the module's docstring), kept as the
+    graph grows: :meth:`added` after nodes are created, :meth:`revise` after a batch of
+    expansions."""
+
+    def __init__(self, gr: Graph, hfn: Heuristic) -> None:
+        self.gr = gr
+        self.hfn = hfn
+        self.low: list[Bound] = []
+        self.full_passes = 0  # revisions done by a whole pass (a bound that fell: none expected)
+        self.seen = bytearray()  # the nodes of the best partial policy at the last walk
+        self.added()
+
+    def added(self) -> None:
+        """Give the nodes created since the last call their ``h`` as bound."""
+        low, states, hfn = self.low, self.gr.states, self.hfn
+        for n in range(len(low), len(states)):
+            low.append(hfn(states[n]))
+
+    def walk(self, root: int) -> tuple[list[int], list[int]]:
+        """Return the tips of the best partial policy from ``root`` (the module's docstring)
+        and the nodes on it whose bound is *stale*, below what their children's bounds now
+        give (:meth:`revise` keeps only the best partial policy up to date), each in the
+        order a depth-first walk meets them. With an infinite bound at the root every option
+        ties: the walk then reaches everything reachable, as a search for a proof that no
+        policy exists must."""
+        gr, low = self.gr, self.low
+        status, states, edges_of = gr.status, gr.states, gr.edges
+        seen = self.seen = bytearray(len(states))
+        seen[root] = 1
+        stack = [root]
+        tips: list[int] = []
+        stale: list[int] = []
+        while stack:
+            n = stack.pop()
+            s = status[n]
+            if s == OPEN:
+                tips.append(n)
+                continue
+            if s != EXPANDED:
+                continue
+            v = low[n]
+            if states[n].turn == ROBOT:
+                tied = False
+                for e in edges_of[n]:
+                    c = e.child
+                    if c >= 0 and e.move.cost + low[c] == v:
+                        tied = True
+                        if not seen[c]:
+                            seen[c] = 1
+                            stack.append(c)
+                if not tied and v != INF:
+                    stale.append(n)  # every option now costs more than its bound
+            else:
+                worst: Bound = 0
+                for e in edges_of[n]:
+                    c = e.child
+                    if c < 0:
+                        worst = INF
+                        continue
+                    x = e.move.cost + low[c]
+                    if x > worst:
+                        worst = x
+                    if not seen[c]:
+                        seen[c] = 1
+                        stack.append(c)
+                if worst != v:
+                    stale.append(n)
+        return tips, stale
+
+    def _eval(self, n: int) -> Bound:
+        """Return ``n``'s bound from its children's current bounds (its own ``h`` while
+        open)."""
+        gr, low = self.gr, self.low
+        s = gr.status[n]
+        if s == GOAL:
+            return 0
+        if s == DEAD:
+            return INF
+        if s == OPEN:
+            return low[n]
+        edges = gr.edges[n]
+        if gr.states[n].turn == ROBOT:
+            best: Bound = INF
+            for e in edges:
+                if e.child >= 0:
+                    x = e.move.cost + low[e.child]
+                    if x < best:
+                        best = x
+            return best
+        if not edges:
+            return INF
+        worst: Bound = 0
+        for e in edges:
+            if e.child < 0:
+                return INF
+            x = e.move.cost + low[e.child]
+            if x > worst:
+                worst = x
+        return worst
+
+    def revise(self, expanded: list[int]) -> None:
+        """The nodes ``expanded`` were just expanded (or became goals or dead ends): bring
+        every bound back to the least fixpoint. In GTPyhop-style pseudo-code::
+
+            revise(expanded):
+                raised = the nodes of expanded whose equation now differs from their bound
+                while raised:
+                    affected = raised, and up through the parents whose bound affected
+                        children give (cost + low(child) = low(parent)): a human node one
+                        of whose greatest branches is affected, a robot node all of whose
+                        least options are; infinite bounds stay
+                    recompute the affected bounds by Knuth's pass, the others' fixed (an
+                        affected node the pass never finalises: infinite)
+                    raised = the human parents left out that a risen child now exceeds
+
+        Only the nodes of the best partial policy at the last :meth:`walk` are revised: a node
+        off it keeps a bound that may be *stale*, below the least fixpoint but still a lower
+        bound (bounds only rise), until a walk meets it. When the loop ends every node of the
+        best partial policy satisfies its equation: a robot node left out has its least option
+        elsewhere (the affected only rise), a human node left out no child above its bound. A
+        bound that fell (which a consistent ``h`` rules out) is handled by a pass over the
+        whole graph."""
+        low = self.low
+        raised: list[int] = []
+        for n in expanded:
+            v = self._eval(n)
+            if v < low[n]:
+                self._whole_pass()
+                return
+            if v != low[n]:
+                raised.append(n)
+        while raised:
+            affected = self._affected(raised)
+            before = {x: low[x] for x in affected}
+            self._pass(affected)
+            raised = self._exceeded(affected, before)
+
+    def _affected(self, raised: list[int]) -> set[int]:
+        """Return ``raised`` and the nodes above whose bound only they give (:meth:`revise`):
+        a human node one of whose greatest branches is affected, a robot node all of whose
+        least options are."""
+        gr, low = self.gr, self.low
+        status, states, edges_of = gr.status, gr.states, gr.edges
+        seen = self.seen
+        ns = len(seen)
+        affected = set(raised)
+        support: dict[int, int] = {}  # robot nodes: their least options not affected yet
+        stack = list(raised)
+        while stack:
+            x = stack.pop()
+            lx = low[x]
+            for p in set(gr.parents(x)):
+                if p in affected or status[p] != EXPANDED or p >= ns or not seen[p]:
+                    continue  # off the best partial policy: left stale (:meth:`walk`)
+                lp = low[p]
+                if lp == INF:
+                    continue  # a rise cannot change it
+                gives = 0
+                for e in edges_of[p]:
+                    if e.child == x and e.move.cost + lx == lp:
+                        gives += 1
+                if not gives:
+                    continue
+                if states[p].turn == ROBOT:
+                    left = support.get(p)
+                    if left is None:
+                        left = 0
+                        for e in edges_of[p]:
+                            c = e.child
+                            if c >= 0 and c not in affected and e.move.cost + low[c] == lp:
+                                left += 1
+                    else:
+                        left -= gives
+                    support[p] = left
+                    if left > 0:
+                        continue
+                affected.add(p)
+                stack.append(p)
+        return affected
+
+    def _exceeded(self, affected: set[int], before: dict[int, Bound]) -> list[int]:
+        """Return the human nodes outside ``affected`` whose bound a risen child of
+        ``affected`` now exceeds."""
+        gr, low = self.gr, self.low
+        status, states, edges_of = gr.status, gr.states, gr.edges
+        out: list[int] = []
+        met: set[int] = set()
+        walked = self.seen
+        ns = len(walked)
+        for x, was in before.items():
+            lx = low[x]
+            if lx == was:
+                continue
+            for p in gr.parents(x):
+                if (p in affected or p in met or status[p] != EXPANDED or p >= ns
+                        or not walked[p] or states[p].turn == ROBOT or low[p] == INF):
+                    continue
+                lp = low[p]
+                for e in edges_of[p]:
+                    if e.child == x and e.move.cost + lx > lp:
+                        met.add(p)
+                        out.append(p)
+                        break
+        return out
+
+    def _pass(self, nodes: set[int]) -> None:
+        """Knuth's pass (:func:`~.values.knuth`) over ``nodes``, the bounds of the other nodes
+        fixed: each of ``nodes`` gets the least fixpoint of its equation, infinite where the
+        pass never finalises it."""
+        gr, low = self.gr, self.low
+        status, states, edges_of = gr.status, gr.states, gr.edges
+        heap: list[tuple[Bound, int]] = []
+        remaining: dict[int, int] = {}
+        worst: dict[int, Cost] = {}
+        for x in nodes:
+            s = status[x]
+            if s == GOAL:
+                heap.append((0, x))
+                continue
+            if s != EXPANDED:  # a dead end (an open node is never affected)
+                continue
+            edges = edges_of[x]
+            if states[x].turn == ROBOT:
+                best: Bound = INF
+                for e in edges:
+                    c = e.child
+                    if c >= 0 and c not in nodes and e.move.cost + low[c] < best:
+                        best = e.move.cost + low[c]
+                if best < INF:
+                    heap.append((best, x))
+                continue
+            if not edges or any(e.child < 0 for e in edges):
+                continue
+            r, w = 0, 0
+            for e in edges:
+                c = e.child
+                if c in nodes:
+                    r += 1
+                elif e.move.cost + low[c] > w:
+                    w = e.move.cost + low[c]  # type: ignore[assignment]  # finite or INF
+            remaining[x], worst[x] = r, w
+            if r == 0:
+                heap.append((w, x))
+        heapq.heapify(heap)
+        final: set[int] = set()
+        while heap:
+            v, x = heapq.heappop(heap)
+            if x in final:
+                continue
+            final.add(x)
+            low[x] = v
+            for p in set(gr.parents(x)):
+                if p not in nodes or p in final:
+                    continue
+                robot = states[p].turn == ROBOT
+                for e in edges_of[p]:
+                    if e.child != x:
+                        continue
+                    cand = v + e.move.cost
+                    if robot:
+                        heapq.heappush(heap, (cand, p))
+                    elif remaining.get(p, 0) > 0:  # none: a failing branch, infinite
+                        remaining[p] -= 1
+                        if cand > worst[p]:
+                            worst[p] = cand  # type: ignore[assignment]
+                        if remaining[p] == 0:
+                            heapq.heappush(heap, (worst[p], p))
+        for x in nodes:
+            if x not in final:
+                low[x] = INF
+
+    def _whole_pass(self) -> None:
+        """Recompute every expanded node's bound by a pass over the whole graph."""
+        self.full_passes += 1
+        status = self.gr.status
+        self._pass({n for n in range(len(self.low)) if status[n] != OPEN})
