@@ -18,13 +18,15 @@ up only through the nodes whose value it supported (:meth:`Bounds.revise`).
 from __future__ import annotations
 
 import heapq
+from collections.abc import Sequence
 
 from ..epistemic.state import ROBOT
 from ..model.problem import Cost
-from .graph import DEAD, EXPANDED, GOAL, OPEN, Graph
+from .graph import DEAD, EXPANDED, GOAL, OPEN, Edge, Graph
 from .heuristic import Bound, Heuristic
 
 INF = float("inf")
+FEW_EDGES = 16  # a node with more edges is read through a table by child (Bounds._edges)
 
 
 class Bounds:
@@ -38,6 +40,7 @@ class Bounds:
         self.low: list[Bound] = []
         self.full_passes = 0  # revisions done by a whole pass (a bound that fell: none expected)
         self.seen = bytearray()  # the nodes of the best partial policy at the last walk
+        self._edges_to: dict[int, dict[int, list[Edge]]] = {}  # during a revision (_edges)
         self.added()
 
     def added(self) -> None:
@@ -159,11 +162,28 @@ class Bounds:
                 return
             if v != low[n]:
                 raised.append(n)
+        self._edges_to = {}
         while raised:
             affected = self._affected(raised)
             before = {x: low[x] for x in affected}
             self._pass(affected)
             raised = self._exceeded(affected, before)
+        self._edges_to = {}
+
+    def _edges(self, p: int, x: int) -> Sequence[Edge]:
+        """Return edges of ``p`` among which are all its edges to ``x``: all of them, or past
+        :data:`FEW_EDGES` only those to ``x``, from a table of ``p``'s edges by child made once
+        per revision (a node with thousands of children, each revised, would otherwise be
+        scanned once per child: IPC Woodworking's root has 14,581)."""
+        edges = self.gr.edges[p]
+        if len(edges) <= FEW_EDGES:
+            return edges
+        by_child = self._edges_to.get(p)
+        if by_child is None:
+            by_child = self._edges_to[p] = {}
+            for e in edges:
+                by_child.setdefault(e.child, []).append(e)
+        return by_child.get(x, ())
 
     def _affected(self, raised: list[int]) -> set[int]:
         """Return ``raised`` and the nodes above whose bound only they give (:meth:`revise`):
@@ -186,7 +206,7 @@ class Bounds:
                 if lp == INF:
                     continue  # a rise cannot change it
                 gives = 0
-                for e in edges_of[p]:
+                for e in self._edges(p, x):
                     if e.child == x and e.move.cost + lx == lp:
                         gives += 1
                 if not gives:
@@ -212,7 +232,7 @@ class Bounds:
         """Return the human nodes outside ``affected`` whose bound a risen child of
         ``affected`` now exceeds."""
         gr, low = self.gr, self.low
-        status, states, edges_of = gr.status, gr.states, gr.edges
+        status, states = gr.status, gr.states
         out: list[int] = []
         met: set[int] = set()
         walked = self.seen
@@ -226,7 +246,7 @@ class Bounds:
                         or not walked[p] or states[p].turn == ROBOT or low[p] == INF):
                     continue
                 lp = low[p]
-                for e in edges_of[p]:
+                for e in self._edges(p, x):
                     if e.child == x and e.move.cost + lx > lp:
                         met.add(p)
                         out.append(p)
@@ -283,7 +303,7 @@ class Bounds:
                 if p not in nodes or p in final:
                     continue
                 robot = states[p].turn == ROBOT
-                for e in edges_of[p]:
+                for e in self._edges(p, x):
                     if e.child != x:
                         continue
                     cand = v + e.move.cost
