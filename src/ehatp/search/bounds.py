@@ -39,7 +39,6 @@ class Bounds:
         self.hfn = hfn
         self.low: list[Bound] = []
         self.full_passes = 0  # revisions done by a whole pass (a bound that fell: none expected)
-        self.seen = bytearray()  # the nodes of the best partial policy at the last walk
         self._edges_to: dict[int, dict[int, list[Edge]]] = {}  # during a revision (_edges)
         self.added()
 
@@ -52,13 +51,13 @@ class Bounds:
     def walk(self, root: int) -> tuple[list[int], list[int]]:
         """Return the tips of the best partial policy from ``root`` (the module's docstring)
         and the nodes on it whose bound is *stale*, below what their children's bounds now
-        give (:meth:`revise` keeps only the best partial policy up to date), each in the
-        order a depth-first walk meets them. With an infinite bound at the root every option
-        ties: the walk then reaches everything reachable, as a search for a proof that no
-        policy exists must."""
+        give, each in the order a depth-first walk meets them. :meth:`revise` leaves none (a
+        guard: the search revises what a walk finds stale before it expands). With an
+        infinite bound at the root every option ties: the walk then reaches everything
+        reachable, as a search for a proof that no policy exists must."""
         gr, low = self.gr, self.low
         status, states, edges_of = gr.status, gr.states, gr.edges
-        seen = self.seen = bytearray(len(states))
+        seen = bytearray(len(states))
         seen[root] = 1
         stack = [root]
         tips: list[int] = []
@@ -146,13 +145,11 @@ class Bounds:
                         affected node the pass never finalises: infinite)
                     raised = the human parents left out that a risen child now exceeds
 
-        Only the nodes of the best partial policy at the last :meth:`walk` are revised: a node
-        off it keeps a bound that may be *stale*, below the least fixpoint but still a lower
-        bound (bounds only rise), until a walk meets it. When the loop ends every node of the
-        best partial policy satisfies its equation: a robot node left out has its least option
-        elsewhere (the affected only rise), a human node left out no child above its bound. A
-        bound that fell (which a consistent ``h`` rules out) is handled by a pass over the
-        whole graph."""
+        When the loop ends every node satisfies its equation: a robot node left out has its
+        least option elsewhere (the affected only rise), a human node left out no child above
+        its bound. With positive costs a finite solution is unique, and the bounds never pass
+        the least fixpoint, so they are it. A bound that fell (which a consistent ``h`` rules
+        out) is handled by a pass over the whole graph."""
         low = self.low
         raised: list[int] = []
         for n in expanded:
@@ -191,8 +188,6 @@ class Bounds:
         least options are."""
         gr, low = self.gr, self.low
         status, states, edges_of = gr.status, gr.states, gr.edges
-        seen = self.seen
-        ns = len(seen)
         affected = set(raised)
         support: dict[int, int] = {}  # robot nodes: their least options not affected yet
         stack = list(raised)
@@ -200,8 +195,8 @@ class Bounds:
             x = stack.pop()
             lx = low[x]
             for p in set(gr.parents(x)):
-                if p in affected or status[p] != EXPANDED or p >= ns or not seen[p]:
-                    continue  # off the best partial policy: left stale (:meth:`walk`)
+                if p in affected or status[p] != EXPANDED:
+                    continue
                 lp = low[p]
                 if lp == INF:
                     continue  # a rise cannot change it
@@ -235,15 +230,13 @@ class Bounds:
         status, states = gr.status, gr.states
         out: list[int] = []
         met: set[int] = set()
-        walked = self.seen
-        ns = len(walked)
         for x, was in before.items():
             lx = low[x]
             if lx == was:
                 continue
             for p in gr.parents(x):
-                if (p in affected or p in met or status[p] != EXPANDED or p >= ns
-                        or not walked[p] or states[p].turn == ROBOT or low[p] == INF):
+                if (p in affected or p in met or status[p] != EXPANDED
+                        or states[p].turn == ROBOT or low[p] == INF):
                     continue
                 lp = low[p]
                 for e in self._edges(p, x):
