@@ -48,7 +48,7 @@ from ..model.grounded import Grounded
 from ..model.options import ObjectiveKind
 from ..model.problem import Cost
 from . import heuristic as _heuristic
-from .bounds import Bounds
+from .bounds import SPREAD, Bounds
 from .graph import (
     DEAD,
     EXPANDED,
@@ -269,7 +269,9 @@ class _Search:
             focus(problem):
                 low(root) = h(root)
                 while the best partial policy has tips:
-                    for each tip n: expand n (new children: low = h)
+                    for each tip n, then their children the bounds follow, breadth first,
+                            until the batch is SPREAD-th of the last revision's work:
+                        expand n (new children: low = h)
                     revise the bounds (they only rise)
                 return the root's bound is its value
 
@@ -279,9 +281,10 @@ class _Search:
         ``cost + low(child)`` above the node's value, so it is worse whatever lies below;
         the options it follows are exactly those of the node's value. Those are the nodes
         and options the choices read (:func:`~.values.compute_values`), all explored, with
-        the same values and the same sub-policies for the tie keys. Every tip expanded has
-        ``g + h <= low(root) <= V``, so the states expanded are among those the search by
-        ``f`` expands."""
+        the same values and the same sub-policies for the tie keys. Which nodes are expanded
+        on the way changes only how soon that happens. Every node expanded has
+        ``g + h <= low(root) <= V`` (a tip on the best partial policy; a node below one only
+        if so), so the states expanded are among those the search by ``f`` expands."""
         gr, bounds, root = self.graph, self.bounds, self.root
         assert bounds is not None
         scratch: list[Entry] = []
@@ -296,7 +299,15 @@ class _Search:
                     return False
                 return True
             self.stats.frontier = len(tips)
-            for n in tips:
+            # the batch goes on below the tips, along the options the bounds follow, until it
+            # is an eighth of the last revision's work (one revision per few tips, when a
+            # few deep tips raise most of the graph's bounds round after round)
+            target = max(len(tips), bounds.last_work // SPREAD)
+            work = list(tips)
+            queued = set(tips)
+            for n in work:
+                if gr.status[n] != OPEN:
+                    continue
                 if self._limit_reached():
                     return False
                 _expand(gr, n, scratch, self.stats, self.max_depth, None, self.max_states)
@@ -307,7 +318,14 @@ class _Search:
                 if self._after_expansion(n):
                     return False
                 bounds.added()
-            bounds.revise(tips)
+                if len(work) < target:
+                    # only below the root's bound: expanded by the search by f as well
+                    top, low, gs = bounds.low[root], bounds.low, gr.g
+                    for c in bounds.followed(n):
+                        if c not in queued and gr.status[c] == OPEN and gs[c] + low[c] <= top:
+                            queued.add(c)
+                            work.append(c)
+            bounds.revise([n for n in work if gr.status[n] != OPEN])
 
     def _proven(self, f: Bound) -> bool:
         """The stopping rule (the module's docstring): every node with a smaller ``f`` is

@@ -27,6 +27,7 @@ from .heuristic import Bound, Heuristic
 
 INF = float("inf")
 FEW_EDGES = 16  # a node with more edges is read through a table by child (Bounds._edges)
+SPREAD = 8  # a batch of expansions is at least 1/SPREAD of the last revision's work (nodes)
 
 
 class Bounds:
@@ -38,6 +39,7 @@ class Bounds:
         self.gr = gr
         self.hfn = hfn
         self.low: list[Bound] = []
+        self.last_work = 0  # the nodes the last revision recomputed
         self.full_passes = 0  # revisions done by a whole pass (a bound that fell: none expected)
         self._edges_to: dict[int, dict[int, list[Edge]]] = {}  # during a revision (_edges)
         self.added()
@@ -98,6 +100,19 @@ class Bounds:
                 if worst != v:
                     stale.append(n)
         return tips, stale
+
+    def followed(self, n: int) -> list[int]:
+        """Return the children the best partial policy follows from ``n`` on the current
+        bounds, ``n``'s own equation included: a human node's every branch, a robot node's
+        least options (none unless ``n`` is expanded)."""
+        gr, low = self.gr, self.low
+        if gr.status[n] != EXPANDED:
+            return []
+        edges = gr.edges[n]
+        if gr.states[n].turn != ROBOT:
+            return [e.child for e in edges if e.child >= 0]
+        v = self._eval(n)
+        return [e.child for e in edges if e.child >= 0 and e.move.cost + low[e.child] == v]
 
     def _eval(self, n: int) -> Bound:
         """Return ``n``'s bound from its children's current bounds (its own ``h`` while
@@ -160,9 +175,11 @@ class Bounds:
             if v != low[n]:
                 raised.append(n)
         self._edges_to = {}
+        self.last_work = 0
         while raised:
             affected = self._affected(raised)
             before = {x: low[x] for x in affected}
+            self.last_work += len(affected)
             self._pass(affected)
             raised = self._exceeded(affected, before)
         self._edges_to = {}
