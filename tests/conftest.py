@@ -122,6 +122,42 @@ def big_problem(tmp_path: Path) -> Path:
     return path
 
 
+def policy_text(p: Problem, **options: Any) -> tuple[str, str]:
+    """Solve ``p`` with ``options`` (and the agreement benchmark's state limit, 20 s); return
+    the status and the policy's JSON without its statistics (two searches that count other
+    states write other counts), or the reason there is none."""
+    import json
+
+    from ehatp.experiments import agreement
+
+    r = ehatp.solve(p, max_states=agreement.MAX_STATES, timeout=20, **options)
+    if r.policy is None:
+        return r.status, r.reason
+    data = json.loads(r.policy.to_json())
+    data.pop("stats")
+    return r.status, json.dumps(data, sort_keys=True)
+
+
+def random_policies_agree(seeds: range, first: dict[str, Any], second: dict[str, Any],
+                          symmetries: tuple[bool | None, ...] = (None,)) -> int:
+    """Assert that the random problems of ``seeds`` get the same :func:`policy_text` solved
+    with the options ``first`` and with ``second`` (each symmetry setting of ``symmetries``;
+    a solve stopped by a limit is left out); return how many solved ones were compared."""
+    from ehatp.experiments import randomgen
+
+    compared = 0
+    for seed in seeds:
+        p = randomgen.problem(seed)
+        for symmetry in symmetries:
+            a = policy_text(p, symmetry=symmetry, **first)
+            b = policy_text(p, symmetry=symmetry, **second)
+            if "limit" in a[0] or "limit" in b[0] or "timeout" in (a[0], b[0]):
+                continue
+            assert a == b, (seed, symmetry)
+            compared += a[0] == "solved"
+    return compared
+
+
 BRANCHES_FAST = 500
 """Tests that run every branch of every example mark slow the examples of more leaves (the
 ten-cube stacking ones): they run in CI, and `make test-fast` stays a quick loop."""

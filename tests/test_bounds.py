@@ -6,7 +6,6 @@ as without it."""
 from __future__ import annotations
 
 import heapq
-import json
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -14,14 +13,14 @@ import pytest
 
 import ehatp
 from ehatp.epistemic.state import HUMAN, ROBOT
-from ehatp.experiments import agreement, randomgen
+from ehatp.experiments import randomgen
 from ehatp.model.grounding import ground_problem
 from ehatp.search import bounds as bounds_module
 from ehatp.search.andor import search
 from ehatp.search.bounds import INF, Bounds
 from ehatp.search.graph import DEAD, EXPANDED, GOAL, OPEN, Graph
 
-from .conftest import EXAMPLES, TABLE1, Example
+from .conftest import EXAMPLES, TABLE1, Example, policy_text, random_policies_agree
 
 # --- a hand-built graph --------------------------------------------------------------------
 
@@ -262,15 +261,7 @@ def test_the_focused_search_expands_a_subset_of_the_search_by_f(example: Example
 
 
 def _policy(p: ehatp.Problem, focus: bool, symmetry: bool | None = None) -> tuple[str, str]:
-    """The status and the policy's JSON without its statistics (states counted differ), or
-    the reason there is none."""
-    r = ehatp.solve(p, max_states=agreement.MAX_STATES, timeout=20, symmetry=symmetry,
-                    focus=focus)
-    if r.policy is None:
-        return r.status, r.reason
-    data = json.loads(r.policy.to_json())
-    data.pop("stats")
-    return r.status, json.dumps(data, sort_keys=True)
+    return policy_text(p, focus=focus, symmetry=symmetry)
 
 
 @pytest.mark.parametrize("example", EXAMPLES, ids=str)
@@ -281,29 +272,13 @@ def test_every_example_has_the_same_policy_focused_or_not(example: Example) -> N
 
 
 def test_random_problems_have_the_same_policy_focused_or_not() -> None:
-    compared = 0
-    for seed in range(60):
-        p = randomgen.problem(seed)
-        on, off = _policy(p, True), _policy(p, False)
-        if "limit" in on[0] or "limit" in off[0] or "timeout" in (on[0], off[0]):
-            continue
-        assert on == off, seed
-        compared += on[0] == "solved"
-    assert compared >= 20
+    assert random_policies_agree(range(60), {"focus": True}, {"focus": False}) >= 20
 
 
 @pytest.mark.slow  # 600 random problems, each solved four times
 def test_many_random_problems_have_the_same_policy_focused_or_not() -> None:
-    compared = 0
-    for seed in range(60, 660):
-        p = randomgen.problem(seed)
-        for symmetry in (None, False):
-            on, off = _policy(p, True, symmetry), _policy(p, False, symmetry)
-            if "limit" in on[0] or "limit" in off[0] or "timeout" in (on[0], off[0]):
-                continue
-            assert on == off, (seed, symmetry)
-            compared += on[0] == "solved"
-    assert compared >= 400
+    assert random_policies_agree(range(60, 660), {"focus": True}, {"focus": False},
+                                 (None, False)) >= 400
 
 
 def test_an_unsolvable_problem_is_explained_as_the_search_by_f_explains_it() -> None:

@@ -22,8 +22,9 @@ from collections.abc import Sequence
 
 from ..epistemic.state import ROBOT
 from ..model.problem import Cost
-from .graph import DEAD, EXPANDED, GOAL, OPEN, Edge, Graph
+from .graph import EXPANDED, GOAL, OPEN, Edge, Graph
 from .heuristic import Bound, Heuristic
+from .values import equation
 
 INF = float("inf")
 FEW_EDGES = 16  # a node with more edges is read through a table by child (Bounds._edges)
@@ -117,33 +118,9 @@ class Bounds:
     def _eval(self, n: int) -> Bound:
         """Return ``n``'s bound from its children's current bounds (its own ``h`` while
         open)."""
-        gr, low = self.gr, self.low
-        s = gr.status[n]
-        if s == GOAL:
-            return 0
-        if s == DEAD:
-            return INF
-        if s == OPEN:
-            return low[n]
-        edges = gr.edges[n]
-        if gr.states[n].turn == ROBOT:
-            best: Bound = INF
-            for e in edges:
-                if e.child >= 0:
-                    x = e.move.cost + low[e.child]
-                    if x < best:
-                        best = x
-            return best
-        if not edges:
-            return INF
-        worst: Bound = 0
-        for e in edges:
-            if e.child < 0:
-                return INF
-            x = e.move.cost + low[e.child]
-            if x > worst:
-                worst = x
-        return worst
+        if self.gr.status[n] == OPEN:
+            return self.low[n]
+        return equation(self.gr, n, self.low)  # a dead end has no edge: infinite
 
     def revise(self, expanded: list[int]) -> None:
         """The nodes ``expanded`` were just expanded (or became goals or dead ends): bring

@@ -31,7 +31,7 @@ inside the passes too.
 from __future__ import annotations
 
 import heapq
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 
@@ -279,28 +279,7 @@ class LiveWorst:
 
     def _eval(self, n: int) -> Cost | float:
         """``n``'s equation on the current values of its children."""
-        gr, value = self.gr, self.value
-        if gr.status[n] == GOAL:
-            return 0
-        edges = gr.edges[n]
-        if gr.states[n].turn == ROBOT:  # robot: the best option
-            best: Cost | float = INF
-            for e in edges:
-                if e.child >= 0:
-                    x = e.move.cost + value[e.child]
-                    if x < best:
-                        best = x
-            return best
-        if not edges:
-            return INF
-        worst: Cost | float = 0
-        for e in edges:
-            if e.child < 0:
-                return INF
-            x = e.move.cost + value[e.child]
-            if x > worst:
-                worst = x
-        return worst
+        return equation(self.gr, n, self.value)
 
     def _lower(self, n: int, v: Cost | float) -> None:
         """Lower ``n`` to ``v`` and let the decrease travel up through the ancestors, least new
@@ -325,6 +304,34 @@ class LiveWorst:
                     cand = self._eval(p)
                 if cand < value[p]:
                     heapq.heappush(heap, (cand, p))
+
+
+def equation(gr: Graph, n: int, value: Sequence[Cost | float]) -> Cost | float:
+    """§7, worst case: node ``n``'s equation on its children's ``value``: 0 at a goal, the
+    least ``cost + value(child)`` over a robot node's options (infinite without one), the
+    greatest over a human node's branches (infinite without a branch, or with one that
+    fails)."""
+    if gr.status[n] == GOAL:
+        return 0
+    edges = gr.edges[n]
+    if gr.states[n].turn == ROBOT:  # robot: the best option
+        best: Cost | float = INF
+        for e in edges:
+            if e.child >= 0:
+                x = e.move.cost + value[e.child]
+                if x < best:
+                    best = x
+        return best
+    if not edges:
+        return INF
+    worst: Cost | float = 0
+    for e in edges:
+        if e.child < 0:
+            return INF
+        x = e.move.cost + value[e.child]
+        if x > worst:
+            worst = x
+    return worst
 
 
 def _positive_costs(gr: Graph) -> bool:
