@@ -294,3 +294,26 @@ def test_the_module_names_no_switch() -> None:
     # options are arguments (solve(focus=...), --no-focus), never module-level switches
     assert not [k for k, v in vars(bounds_module).items()
                 if k.isupper() and isinstance(v, bool)]
+
+
+def test_a_long_revision_looks_at_the_limits() -> None:
+    # a chain of 3,000 robot nodes, each of h 0, whose last turns out a dead end: the rise
+    # travels up the whole chain, and the walks and passes call the budget's check on the way
+    gr = _Graph()
+    chain = [gr.add(ROBOT, 0) for _ in range(3000)]
+    calls = 0
+
+    def check() -> None:
+        nonlocal calls
+        calls += 1
+
+    b = Bounds(gr, lambda node: node.h, check)  # type: ignore[arg-type]
+    for x, y in zip(chain, chain[1:], strict=False):
+        gr.expand(x, EXPANDED, [(1, y)])
+    b.revise(chain[:-1])  # each rises to 1 + the next's 0, then up the chain
+    assert b.low[chain[0]] == 2999 and calls > 0
+    calls = 0
+    assert b.walk(chain[0]) == ([chain[-1]], [])
+    gr.expand(chain[-1], DEAD, [])
+    b.revise([chain[-1]])
+    assert b.low[chain[0]] == INF and calls >= 4

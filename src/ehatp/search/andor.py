@@ -190,7 +190,8 @@ class _Search:
         self.live: LiveWorst | None = None  # worst-case values, kept from the first goal on
         # the focused search's lower bounds (worst case with the heuristic), and whether a
         # depth cut sends the work back to the search by f
-        self.bounds = Bounds(self.graph, self.hfn) if focus and self.hfn is not None else None
+        self.bounds = (Bounds(self.graph, self.hfn, budget.check)
+                       if focus and self.hfn is not None else None)
         self.unfocus = False
 
     def _opening(self, grounded: Grounded) -> EState:

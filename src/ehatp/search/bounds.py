@@ -18,13 +18,13 @@ up only through the nodes whose value it supported (:meth:`Bounds.revise`).
 from __future__ import annotations
 
 import heapq
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from ..epistemic.state import ROBOT
 from ..model.problem import Cost
 from .graph import EXPANDED, GOAL, OPEN, Edge, Graph
 from .heuristic import Bound, Heuristic
-from .values import equation
+from .values import CHECK_EVERY, equation
 
 INF = float("inf")
 FEW_EDGES = 16  # a node with more edges is read through a table by child (Bounds._edges)
@@ -36,9 +36,12 @@ class Bounds:
     graph grows: :meth:`added` after nodes are created, :meth:`revise` after a batch of
     expansions."""
 
-    def __init__(self, gr: Graph, hfn: Heuristic) -> None:
+    def __init__(self, gr: Graph, hfn: Heuristic,
+                 check: Callable[[], None] | None = None) -> None:
         self.gr = gr
         self.hfn = hfn
+        # the budget's check (:mod:`.limits`), every CHECK_EVERY + 1 nodes a revision reads
+        self.check = check if check is not None else _never
         self.low: list[Bound] = []
         self.last_work = 0  # the nodes the last revision recomputed
         self.full_passes = 0  # revisions done by a whole pass (a bound that fell: none expected)
@@ -65,7 +68,11 @@ class Bounds:
         stack = [root]
         tips: list[int] = []
         stale: list[int] = []
+        check, steps = self.check, 0
         while stack:
+            steps += 1
+            if not steps & CHECK_EVERY:
+                check()
             n = stack.pop()
             s = status[n]
             if s == OPEN:
@@ -185,7 +192,11 @@ class Bounds:
         affected = set(raised)
         support: dict[int, int] = {}  # robot nodes: their least options not affected yet
         stack = list(raised)
+        check, steps = self.check, 0
         while stack:
+            steps += 1
+            if not steps & CHECK_EVERY:
+                check()
             x = stack.pop()
             lx = low[x]
             for p in set(gr.parents(x)):
@@ -280,11 +291,14 @@ class Bounds:
                 heap.append((w, x))
         heapq.heapify(heap)
         final: set[int] = set()
+        check = self.check
         while heap:
             v, x = heapq.heappop(heap)
             if x in final:
                 continue
             final.add(x)
+            if not len(final) & CHECK_EVERY:
+                check()
             low[x] = v
             for p in set(gr.parents(x)):
                 if p not in nodes or p in final:
@@ -311,3 +325,7 @@ class Bounds:
         self.full_passes += 1
         status = self.gr.status
         self._pass({n for n in range(len(self.low)) if status[n] != OPEN})
+
+
+def _never() -> None:
+    """No limit to check."""
