@@ -282,12 +282,15 @@ def test_many_random_problems_have_the_same_policy_focused_or_not() -> None:
 
 
 def test_an_unsolvable_problem_is_explained_as_the_search_by_f_explains_it() -> None:
-    # random problem 24 has no policy; the focused search proves it, then the search by f
-    # explores everything reachable and says why, in the same words
+    # random problem 24 has no policy; the focused search proves it, then explores everything
+    # reachable, as the search by f does, and says why in the same words
     p = randomgen.problem(24)
     on, off = _policy(p, True), _policy(p, False)
     assert on[0] == "unsolvable" and on == off
     assert on[1].startswith("no policy exists: the goal needs")
+    # the same states explored, once: no second search
+    for symmetry in (True, False):
+        assert _expanded(p, True, symmetry) == _expanded(p, False, symmetry)
 
 
 def test_the_module_names_no_switch() -> None:

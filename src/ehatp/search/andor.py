@@ -105,10 +105,11 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
     on) orders a worst-case search by ``g + h`` (:mod:`.heuristic`); the policy is the same
     either way, fewer states are expanded with it. ``focus`` (default: on; worst case with
     the heuristic only) expands the tips of the best partial policy instead
-    (:meth:`_Search._focus`, :mod:`.bounds`): the same policy again, far fewer states. A
-    state cut by the depth limit (§6: the depth of a state is over the paths found, which the
-    focused search finds fewer of), or a root proven to have no policy, sends the work back
-    to the search by ``f``, whose whole explored graph says why (:mod:`.diagnose`).
+    (:meth:`_Search._focus`, :mod:`.bounds`): the same policy again, far fewer states. A root
+    proven to have no policy has everything reachable explored after, as the search by ``f``
+    explores it, whose whole graph says why (:mod:`.diagnose`); a state cut by the depth limit
+    (§6: the depth of a state is over the paths found, which the focused search finds fewer
+    of) sends the work back to the search by ``f``.
 
     In GTPyhop-style pseudo-code (``V``: the worst-case values kept up to date, the module's
     docstring proves the stopping rule)::
@@ -147,7 +148,7 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
         run = _Search(grounded, budget, stats, states_cap, depth_cap, symmetry=symmetry,
                       heuristic=_heuristic.enabled(heuristic), focus=focus)
         run.run()
-        if run.unfocus:  # no policy, or a depth cut: the search by f explains it (§6)
+        if run.unfocus:  # a depth cut: the search by f decides what the limit cuts (§6)
             stats.restart()
             run = _Search(grounded, budget, stats, states_cap, depth_cap, symmetry=symmetry,
                           heuristic=_heuristic.enabled(heuristic), focus=False)
@@ -295,10 +296,9 @@ class _Search:
                 bounds.revise(stale)
                 continue
             if not tips:
-                if not gr.solved[root]:  # proven: no policy; the search by f says why
-                    self.unfocus = True
-                    return False
-                return True
+                # proven: no policy; everything reachable is explored, as the search by f
+                # explores it, so that the same graph says why (:mod:`.diagnose`)
+                return self._exhaust() if not gr.solved[root] else True
             self.stats.frontier = len(tips)
             # the batch goes on below the tips, along the options the bounds follow, until it
             # is an eighth of the last revision's work (one revision per few tips, when a
@@ -327,6 +327,26 @@ class _Search:
                             queued.add(c)
                             work.append(c)
             bounds.revise([n for n in work if gr.status[n] != OPEN])
+
+    def _exhaust(self) -> bool:
+        """Expand every open node, in order of creation, until none is left (True), a limit
+        stops the search or a depth cut sends it back to the search by ``f`` (False)."""
+        gr = self.graph
+        scratch: list[Entry] = []
+        n = 0
+        while n < len(gr.states):
+            if gr.status[n] == OPEN:
+                if self._limit_reached():
+                    return False
+                _expand(gr, n, scratch, self.stats, self.max_depth, None, self.max_states)
+                scratch.clear()
+                if gr.depth_cut:
+                    self.unfocus = True
+                    return False
+                if self._after_expansion(n):
+                    return False
+            n += 1
+        return True
 
     def _proven(self, f: Bound) -> bool:
         """The stopping rule (the module's docstring): every node with a smaller ``f`` is
