@@ -194,6 +194,7 @@ class _Search:
         self.bounds = (Bounds(self.graph, self.hfn, budget.check)
                        if focus and self.hfn is not None else None)
         self.unfocus = False
+        self._scratch: list[Entry] = []  # what _expand queues, unused by the focused search
 
     def _opening(self, grounded: Grounded) -> EState:
         """Return the root's state: the initial state after the problem's opening moves
@@ -289,7 +290,6 @@ class _Search:
         if so), so the states expanded are among those the search by ``f`` expands."""
         gr, bounds, root = self.graph, self.bounds, self.root
         assert bounds is not None
-        scratch: list[Entry] = []
         while True:
             tips, stale = bounds.walk(root)
             if stale:  # bring the best partial policy up to date first
@@ -309,14 +309,7 @@ class _Search:
             for n in work:
                 if gr.status[n] != OPEN:
                     continue
-                if self._limit_reached():
-                    return False
-                _expand(gr, n, scratch, self.stats, self.max_depth, None, self.max_states)
-                scratch.clear()
-                if gr.depth_cut:
-                    self.unfocus = True
-                    return False
-                if self._after_expansion(n):
+                if self._step(n):
                     return False
                 bounds.added()
                 if len(work) < target:
@@ -332,21 +325,25 @@ class _Search:
         """Expand every open node, in order of creation, until none is left (True), a limit
         stops the search or a depth cut sends it back to the search by ``f`` (False)."""
         gr = self.graph
-        scratch: list[Entry] = []
         n = 0
         while n < len(gr.states):
-            if gr.status[n] == OPEN:
-                if self._limit_reached():
-                    return False
-                _expand(gr, n, scratch, self.stats, self.max_depth, None, self.max_states)
-                scratch.clear()
-                if gr.depth_cut:
-                    self.unfocus = True
-                    return False
-                if self._after_expansion(n):
-                    return False
+            if gr.status[n] == OPEN and self._step(n):
+                return False
             n += 1
         return True
+
+    def _step(self, n: int) -> bool:
+        """Expand node ``n`` for the focused search (no queue: its children are found by the
+        walks); whether the search stops: a limit, an order-dependent decision (§3), or a
+        depth cut, which sends the work back to the search by ``f``."""
+        if self._limit_reached():
+            return True
+        _expand(self.graph, n, self._scratch, self.stats, self.max_depth, None, self.max_states)
+        self._scratch.clear()
+        if self.graph.depth_cut:
+            self.unfocus = True
+            return True
+        return self._after_expansion(n)
 
     def _proven(self, f: Bound) -> bool:
         """The stopping rule (the module's docstring): every node with a smaller ``f`` is
