@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 from ..model.agenda import Agenda, Networks
 from ..model.formula import And, Formula, conj, ground_atoms
-from ..model.grounded import FINISH, GOp, Grounded, no_check
+from ..model.grounded import FINISH, GOp, Grounded, bits, no_check
 from ..model.htn import Refiner
 from ..model.options import InformWhere, Intentions, Passes, Relevance, Speech
 from ..model.problem import Cost
@@ -73,14 +73,7 @@ class Call(NamedTuple):
 
 def bits_of(mask: int) -> list[int]:
     """The indices of the set bits of ``m``, lowest first (atoms of a mask, §2)."""
-    out = []
-    i = 0
-    while mask:
-        if mask & 1:
-            out.append(i)
-        mask >>= 1
-        i += 1
-    return out
+    return list(bits(mask))
 
 
 class Semantics:

@@ -230,13 +230,12 @@ def _merge(g: Grounded, mask: int, extra: list[tuple[int, str]]) -> list[str]:
 
 
 def bits(mask: int) -> Iterable[int]:
-    """The indices of the set bits of ``m``, lowest first (the atoms of a mask, §2)."""
-    i = 0
+    """The indices of the set bits of ``m``, lowest first (the atoms of a mask, §2): one step
+    per set bit, not per bit (a world's difference from the truth is a few bits of hundreds)."""
     while mask:
-        if mask & 1:
-            yield i
-        mask >>= 1
-        i += 1
+        low = mask & -mask
+        yield low.bit_length() - 1
+        mask ^= low
 
 
 def no_check() -> None:
