@@ -21,7 +21,6 @@ import heapq
 from collections.abc import Callable, Sequence
 
 from ..epistemic.state import ROBOT
-from ..model.problem import Cost
 from .graph import EXPANDED, GOAL, OPEN, Edge, Graph
 from .heuristic import Bound, Heuristic
 from .values import CHECK_EVERY, equation
@@ -259,7 +258,7 @@ class Bounds:
         status, states, edges_of = gr.status, gr.states, gr.edges
         heap: list[tuple[Bound, int]] = []
         remaining: dict[int, int] = {}
-        worst: dict[int, Cost] = {}
+        worst: dict[int, Bound] = {}
         for x in nodes:
             s = status[x]
             if s == GOAL:
@@ -279,13 +278,14 @@ class Bounds:
                 continue
             if not edges or any(e.child < 0 for e in edges):
                 continue
-            r, w = 0, 0
+            r = 0
+            w: Bound = 0
             for e in edges:
                 c = e.child
                 if c in nodes:
                     r += 1
                 elif e.move.cost + low[c] > w:
-                    w = e.move.cost + low[c]  # type: ignore[assignment]  # finite or INF
+                    w = e.move.cost + low[c]
             remaining[x], worst[x] = r, w
             if r == 0:
                 heap.append((w, x))
@@ -313,7 +313,7 @@ class Bounds:
                     elif remaining.get(p, 0) > 0:  # none: a failing branch, infinite
                         remaining[p] -= 1
                         if cand > worst[p]:
-                            worst[p] = cand  # type: ignore[assignment]
+                            worst[p] = cand
                         if remaining[p] == 0:
                             heapq.heappush(heap, (worst[p], p))
         for x in nodes:
