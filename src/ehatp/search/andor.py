@@ -1,5 +1,11 @@
 """AND/OR graph search over epistemic states (docs/semantics.md §7, "Search").
 
+For the worst case with its lower bound the search is *focused* by default
+(:meth:`_Search._focus`, :mod:`.bounds`, §7 "Search, focused"): only the tips of the best
+partial policy the bounds pick are expanded, and the policy is the one the search by ``f``
+below chooses, from far fewer states. Otherwise (``focus=False``, expected cost, joint steps,
+no bound), and after a depth cut, the search by ``f``:
+
 Nodes are expanded in order of ``f = g + h``: their cheapest path cost from the root ``g`` plus,
 for the worst-case objective, a lower bound ``h`` on the cost still to pay (:mod:`.heuristic`);
 for expected cost ``h = 0``, so the order is ``g``'s, breadth-first when every move costs 1, as
