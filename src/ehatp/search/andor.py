@@ -297,10 +297,7 @@ class _Search:
         gr, bounds, root = self.graph, self.bounds, self.root
         assert bounds is not None
         while True:
-            tips, stale = bounds.walk(root)
-            if stale:  # bring the best partial policy up to date first
-                bounds.revise(stale)
-                continue
+            tips = bounds.walk(root)
             if not tips:
                 # proven: no policy; everything reachable is explored, as the search by f
                 # explores it, so that the same graph says why (:mod:`.diagnose`)
@@ -312,6 +309,9 @@ class _Search:
             target = max(len(tips), bounds.last_work // SPREAD)
             work = list(tips)
             queued = set(tips)
+            # only below the root's bound (fixed until the revision): expanded by the search
+            # by f as well
+            top, low, gs = bounds.low[root], bounds.low, gr.g
             for n in work:
                 if gr.status[n] != OPEN:
                     continue
@@ -319,8 +319,6 @@ class _Search:
                     return False
                 bounds.added()
                 if len(work) < target:
-                    # only below the root's bound: expanded by the search by f as well
-                    top, low, gs = bounds.low[root], bounds.low, gr.g
                     for c in bounds.followed(n):
                         if c not in queued and gr.status[c] == OPEN and gs[c] + low[c] <= top:
                             queued.add(c)

@@ -53,20 +53,17 @@ class Bounds:
         for n in range(len(low), len(states)):
             low.append(hfn(states[n]))
 
-    def walk(self, root: int) -> tuple[list[int], list[int]]:
-        """Return the tips of the best partial policy from ``root`` (the module's docstring)
-        and the nodes on it whose bound is *stale*, below what their children's bounds now
-        give, each in the order a depth-first walk meets them. :meth:`revise` leaves none (a
-        guard: the search revises what a walk finds stale before it expands). With an
-        infinite bound at the root every option ties: the walk then reaches everything
-        reachable, as a search for a proof that no policy exists must."""
+    def walk(self, root: int) -> list[int]:
+        """Return the tips of the best partial policy from ``root`` (the module's docstring),
+        in the order a depth-first walk meets them. With an infinite bound at the root every
+        option ties: the walk then reaches everything reachable, as a search for a proof that
+        no policy exists must."""
         gr, low = self.gr, self.low
         status, states, edges_of = gr.status, gr.states, gr.edges
         seen = bytearray(len(states))
         seen[root] = 1
         stack = [root]
         tips: list[int] = []
-        stale: list[int] = []
         check, steps = self.check, 0
         while stack:
             steps += 1
@@ -79,34 +76,13 @@ class Bounds:
                 continue
             if s != EXPANDED:
                 continue
-            v = low[n]
-            if states[n].turn == ROBOT:
-                tied = False
-                for e in edges_of[n]:
-                    c = e.child
-                    if c >= 0 and e.move.cost + low[c] == v:
-                        tied = True
-                        if not seen[c]:
-                            seen[c] = 1
-                            stack.append(c)
-                if not tied and v != INF:
-                    stale.append(n)  # every option now costs more than its bound
-            else:
-                worst: Bound = 0
-                for e in edges_of[n]:
-                    c = e.child
-                    if c < 0:
-                        worst = INF
-                        continue
-                    x = e.move.cost + low[c]
-                    if x > worst:
-                        worst = x
-                    if not seen[c]:
-                        seen[c] = 1
-                        stack.append(c)
-                if worst != v:
-                    stale.append(n)
-        return tips, stale
+            robot, v = states[n].turn == ROBOT, low[n]
+            for e in edges_of[n]:
+                c = e.child
+                if c >= 0 and not seen[c] and (not robot or e.move.cost + low[c] == v):
+                    seen[c] = 1
+                    stack.append(c)
+        return tips
 
     def followed(self, n: int) -> list[int]:
         """Return the children the best partial policy follows from ``n`` on the current
