@@ -18,15 +18,17 @@ up only through the nodes whose value it supported (:meth:`Bounds.revise`).
 from __future__ import annotations
 
 import heapq
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 
 from ..epistemic.state import ROBOT
-from .graph import EXPANDED, GOAL, OPEN, Edge, Graph
+from ..model.problem import Cost
+from .graph import EXPANDED, GOAL, OPEN, Graph
 from .heuristic import Bound, Heuristic
 from .values import CHECK_EVERY, equation
 
 INF = float("inf")
-FEW_EDGES = 16  # a node with more edges is read through a table by child (Bounds._edges)
+Kids = tuple[tuple[Cost, int], ...]  # a node's edges as (cost, child) pairs
+FEW_EDGES = 16  # a node with more edges is read through a table by child (Bounds._to)
 SPREAD = 8  # a batch of expansions is at least 1/SPREAD of the last revision's work (nodes)
 
 
@@ -44,23 +46,38 @@ class Bounds:
         self.low: list[Bound] = []
         self.last_work = 0  # the nodes the last revision recomputed
         self.full_passes = 0  # revisions done by a whole pass (a bound that fell: none expected)
-        self._edges_to: dict[int, dict[int, list[Edge]]] = {}  # during a revision (_edges)
+        # per node, read off the graph once: whether the robot moves there, and once expanded
+        # its edges as (cost, child) pairs (a node's edges never change once it is expanded)
+        self._robot = bytearray()
+        self._kids: list[Kids | None] = []
+        self._by_child: dict[int, dict[int, Kids]] = {}  # nodes past FEW_EDGES (_to)
         self.added()
 
     def added(self) -> None:
         """Give the nodes created since the last call their ``h`` as bound."""
         low, states, hfn = self.low, self.gr.states, self.hfn
+        robot, kids = self._robot, self._kids
         for n in range(len(low), len(states)):
-            low.append(hfn(states[n]))
+            es = states[n]
+            low.append(hfn(es))
+            robot.append(es.turn == ROBOT)
+            kids.append(None)
+
+    def _kids_of(self, n: int) -> Kids:
+        """Return the edges of the expanded (or goal, or dead) node ``n`` as (cost, child)
+        pairs, in the graph's order (child -1: a failing move)."""
+        k = self._kids[n]
+        if k is None:
+            k = self._kids[n] = tuple([(e.move.cost, e.child) for e in self.gr.edges[n]])
+        return k
 
     def walk(self, root: int) -> list[int]:
         """Return the tips of the best partial policy from ``root`` (the module's docstring),
         in the order a depth-first walk meets them. With an infinite bound at the root every
         option ties: the walk then reaches everything reachable, as a search for a proof that
         no policy exists must."""
-        gr, low = self.gr, self.low
-        status, states, edges_of = gr.status, gr.states, gr.edges
-        seen = bytearray(len(states))
+        low, status, robots, kids = self.low, self.gr.status, self._robot, self._kids
+        seen = bytearray(len(low))
         seen[root] = 1
         stack = [root]
         tips: list[int] = []
@@ -76,26 +93,31 @@ class Bounds:
                 continue
             if s != EXPANDED:
                 continue
-            robot, v = states[n].turn == ROBOT, low[n]
-            for e in edges_of[n]:
-                c = e.child
-                if c >= 0 and not seen[c] and (not robot or e.move.cost + low[c] == v):
-                    seen[c] = 1
-                    stack.append(c)
+            if robots[n]:
+                v = low[n]
+                for k, c in kids[n] or self._kids_of(n):
+                    if c >= 0 and not seen[c] and k + low[c] == v:
+                        seen[c] = 1
+                        stack.append(c)
+            else:
+                for _, c in kids[n] or self._kids_of(n):
+                    if c >= 0 and not seen[c]:
+                        seen[c] = 1
+                        stack.append(c)
         return tips
 
     def followed(self, n: int) -> list[int]:
         """Return the children the best partial policy follows from ``n`` on the current
         bounds, ``n``'s own equation included: a human node's every branch, a robot node's
         least options (none unless ``n`` is expanded)."""
-        gr, low = self.gr, self.low
-        if gr.status[n] != EXPANDED:
+        low = self.low
+        if self.gr.status[n] != EXPANDED:
             return []
-        edges = gr.edges[n]
-        if gr.states[n].turn != ROBOT:
-            return [e.child for e in edges if e.child >= 0]
+        kids = self._kids_of(n)
+        if not self._robot[n]:
+            return [c for _, c in kids if c >= 0]
         v = self._eval(n)
-        return [e.child for e in edges if e.child >= 0 and e.move.cost + low[e.child] == v]
+        return [c for k, c in kids if c >= 0 and k + low[c] == v]
 
     def _eval(self, n: int) -> Bound:
         """Return ``n``'s bound from its children's current bounds (its own ``h`` while
@@ -133,7 +155,6 @@ class Bounds:
                 return
             if v != low[n]:
                 raised.append(n)
-        self._edges_to = {}
         self.last_work = 0
         while raised:
             affected = self._affected(raised)
@@ -141,29 +162,29 @@ class Bounds:
             self.last_work += len(affected)
             self._pass(affected)
             raised = self._exceeded(affected, before)
-        self._edges_to = {}
 
-    def _edges(self, p: int, x: int) -> Sequence[Edge]:
-        """Return edges of ``p`` among which are all its edges to ``x``: all of them, or past
-        :data:`FEW_EDGES` only those to ``x``, from a table of ``p``'s edges by child made once
-        per revision (a node with thousands of children, each revised, would otherwise be
+    def _to(self, p: int, x: int) -> Kids:
+        """Return (cost, child) pairs of ``p`` among which are all its edges to ``x``: all of
+        them, or past :data:`FEW_EDGES` only those to ``x``, from a table of ``p``'s edges by
+        child made once (a node with thousands of children, each revised, would otherwise be
         scanned once per child: IPC Woodworking's root has 14,581)."""
-        edges = self.gr.edges[p]
-        if len(edges) <= FEW_EDGES:
-            return edges
-        by_child = self._edges_to.get(p)
+        kids = self._kids[p] or self._kids_of(p)
+        if len(kids) <= FEW_EDGES:
+            return kids
+        by_child = self._by_child.get(p)
         if by_child is None:
-            by_child = self._edges_to[p] = {}
-            for e in edges:
-                by_child.setdefault(e.child, []).append(e)
+            table: dict[int, list[tuple[Cost, int]]] = {}
+            for pair in kids:
+                table.setdefault(pair[1], []).append(pair)
+            by_child = self._by_child[p] = {c: tuple(v) for c, v in table.items()}
         return by_child.get(x, ())
 
     def _affected(self, raised: list[int]) -> set[int]:
         """Return ``raised`` and the nodes above whose bound only they give (:meth:`revise`):
         a human node one of whose greatest branches is affected, a robot node all of whose
         least options are."""
-        gr, low = self.gr, self.low
-        status, states, edges_of = gr.status, gr.states, gr.edges
+        gr, low, robots, kids_, to = self.gr, self.low, self._robot, self._kids, self._to
+        status, parents = gr.status, gr.parents
         affected = set(raised)
         support: dict[int, int] = {}  # robot nodes: their least options not affected yet
         stack = list(raised)
@@ -174,25 +195,26 @@ class Bounds:
                 check()
             x = stack.pop()
             lx = low[x]
-            for p in set(gr.parents(x)):
+            ps = parents(x)
+            for p in (set(ps) if len(ps) > 1 else ps):
                 if p in affected or status[p] != EXPANDED:
                     continue
                 lp = low[p]
                 if lp == INF:
                     continue  # a rise cannot change it
                 gives = 0
-                for e in self._edges(p, x):
-                    if e.child == x and e.move.cost + lx == lp:
+                kids = kids_[p] or self._kids_of(p)
+                for k, c in (kids if len(kids) <= FEW_EDGES else to(p, x)):
+                    if c == x and k + lx == lp:
                         gives += 1
                 if not gives:
                     continue
-                if states[p].turn == ROBOT:
+                if robots[p]:
                     left = support.get(p)
                     if left is None:
                         left = 0
-                        for e in edges_of[p]:
-                            c = e.child
-                            if c >= 0 and c not in affected and e.move.cost + low[c] == lp:
+                        for k, c in kids:
+                            if c >= 0 and c not in affected and k + low[c] == lp:
                                 left += 1
                     else:
                         left -= gives
@@ -206,8 +228,8 @@ class Bounds:
     def _exceeded(self, affected: set[int], before: dict[int, Bound]) -> list[int]:
         """Return the human nodes outside ``affected`` whose bound a risen child of
         ``affected`` now exceeds."""
-        gr, low = self.gr, self.low
-        status, states = gr.status, gr.states
+        gr, low, robots, to = self.gr, self.low, self._robot, self._to
+        status = gr.status
         out: list[int] = []
         met: set[int] = set()
         for x, was in before.items():
@@ -216,11 +238,11 @@ class Bounds:
                 continue
             for p in gr.parents(x):
                 if (p in affected or p in met or status[p] != EXPANDED
-                        or states[p].turn == ROBOT or low[p] == INF):
+                        or robots[p] or low[p] == INF):
                     continue
                 lp = low[p]
-                for e in self._edges(p, x):
-                    if e.child == x and e.move.cost + lx > lp:
+                for k, c in to(p, x):
+                    if c == x and k + lx > lp:
                         met.add(p)
                         out.append(p)
                         break
@@ -230,8 +252,8 @@ class Bounds:
         """Knuth's pass (:func:`~.values.knuth`) over ``nodes``, the bounds of the other nodes
         fixed: each of ``nodes`` gets the least fixpoint of its equation, infinite where the
         pass never finalises it."""
-        gr, low = self.gr, self.low
-        status, states, edges_of = gr.status, gr.states, gr.edges
+        gr, low, robots, kids_, to = self.gr, self.low, self._robot, self._kids, self._to
+        status, parents = gr.status, gr.parents
         heap: list[tuple[Bound, int]] = []
         remaining: dict[int, int] = {}
         worst: dict[int, Bound] = {}
@@ -242,56 +264,57 @@ class Bounds:
                 continue
             if s != EXPANDED:  # a dead end (an open node is never affected)
                 continue
-            edges = edges_of[x]
-            if states[x].turn == ROBOT:
+            kids = kids_[x] or self._kids_of(x)
+            if robots[x]:
                 best: Bound = INF
-                for e in edges:
-                    c = e.child
-                    if c >= 0 and c not in nodes and e.move.cost + low[c] < best:
-                        best = e.move.cost + low[c]
+                for k, c in kids:
+                    if c >= 0 and c not in nodes and k + low[c] < best:
+                        best = k + low[c]
                 if best < INF:
                     heap.append((best, x))
                 continue
-            if not edges or any(e.child < 0 for e in edges):
+            if not kids or any(c < 0 for _, c in kids):
                 continue
             r = 0
             w: Bound = 0
-            for e in edges:
-                c = e.child
+            for k, c in kids:
                 if c in nodes:
                     r += 1
-                elif e.move.cost + low[c] > w:
-                    w = e.move.cost + low[c]
+                elif k + low[c] > w:
+                    w = k + low[c]
             remaining[x], worst[x] = r, w
             if r == 0:
                 heap.append((w, x))
         heapq.heapify(heap)
         final: set[int] = set()
         check = self.check
+        heappush, heappop = heapq.heappush, heapq.heappop
         while heap:
-            v, x = heapq.heappop(heap)
+            v, x = heappop(heap)
             if x in final:
                 continue
             final.add(x)
             if not len(final) & CHECK_EVERY:
                 check()
             low[x] = v
-            for p in set(gr.parents(x)):
+            ps = parents(x)
+            for p in (set(ps) if len(ps) > 1 else ps):
                 if p not in nodes or p in final:
                     continue
-                robot = states[p].turn == ROBOT
-                for e in self._edges(p, x):
-                    if e.child != x:
+                robot = robots[p]
+                kids = kids_[p] or self._kids_of(p)
+                for k, c in (kids if len(kids) <= FEW_EDGES else to(p, x)):
+                    if c != x:
                         continue
-                    cand = v + e.move.cost
+                    cand = v + k
                     if robot:
-                        heapq.heappush(heap, (cand, p))
+                        heappush(heap, (cand, p))
                     elif remaining.get(p, 0) > 0:  # none: a failing branch, infinite
                         remaining[p] -= 1
                         if cand > worst[p]:
                             worst[p] = cand
                         if remaining[p] == 0:
-                            heapq.heappush(heap, (worst[p], p))
+                            heappush(heap, (worst[p], p))
         for x in nodes:
             if x not in final:
                 low[x] = INF
