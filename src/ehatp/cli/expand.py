@@ -22,7 +22,8 @@ def expand_cmd(
         "--problem", "-p", help="The problem file the policy was planned for.",
         metavar="PROBLEM.toml", show_default=False)],
     out: Annotated[Path, typer.Option(
-        "--out", "-o", help="Where to write the version 2 policy.", show_default=False)],
+        "--out", "-o", help="Where to write the version 2 policy (gzip-compressed if the "
+                            "name ends in .gz).", show_default=False)],
 ) -> None:
     """Write the version 2 graph, over the real objects, of a lifted policy (format version 3).
 

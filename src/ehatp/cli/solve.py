@@ -98,8 +98,9 @@ def solve_cmd(
         help="Problem file (TOML), e.g. examples/cubes/p1.toml.", metavar="PROBLEM.toml",
         show_default=False)],
     out: Annotated[Path | None, typer.Option(
-        "--out", "-o", help="Where to write the policy JSON (default: PROBLEM-NAME.policy.json "
-                            "in the current directory).", show_default=False)] = None,
+        "--out", "-o", help="Where to write the policy JSON, gzip-compressed if the name "
+                            "ends in .gz (default: PROBLEM-NAME.policy.json in the current "
+                            "directory).", show_default=False)] = None,
     timeout: Annotated[float | None, typer.Option(
         "--timeout", min=0.0, help="Stop after this many seconds, whatever the work under "
                                    "way: search, values, extraction or writing (default: the "

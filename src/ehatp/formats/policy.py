@@ -18,10 +18,13 @@ imported in IPython; docs/notebook.md).
 from __future__ import annotations
 
 import contextlib
+import gzip
+import io
 import json
 import os
 import re
 import secrets
+import zlib
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -38,11 +41,32 @@ VERSION = 2  # the version written for a policy over real states; READS lists ev
 VERSION_LIFTED = 3  # the version written for a lifted policy (canonical nodes, renamings)
 READS = (1, 2, 3)
 COMM_KINDS = ("inform", "ask", "announce")
+GZIP_SUFFIX = ".gz"  # a policy file named so is written gzip-compressed (Policy.write)
+_GZIP_MAGIC = b"\x1f\x8b"  # how a gzip file starts: Policy.load reads it whatever its name
+_CHUNK = 1 << 20  # bytes decompressed between two calls of a limit's check
 
 # a control character in a JSON string: an escape (\u001b, \n, ...) after an even number of
 # backslashes, or DEL / a C1 character written raw (JSON refuses raw C0 characters itself)
 _CONTROL_IN_JSON = re.compile(r'\\(?:u00[0189][0-9a-fA-F]|u007[fF]|[bfnrt])|[\x7f-\x9f]')
 
+
+
+def _gunzip(name: str, data: bytes, check: Callable[[], None] | None) -> bytearray:
+    """Return the decompressed bytes of the gzip file ``data`` (named ``name``), a megabyte at
+    a time with ``check`` called between (a small file may hold a large policy: a limit's
+    check stops it); a damaged or truncated file is one :class:`InputError` line."""
+    out = bytearray()
+    try:
+        with gzip.GzipFile(fileobj=io.BytesIO(data), mode="rb") as gz:
+            while piece := gz.read(_CHUNK):
+                out += piece
+                if check is not None:
+                    check()
+    except (OSError, EOFError, zlib.error) as e:  # gzip.BadGzipFile is an OSError
+        what = "truncated" if isinstance(e, EOFError) else str(e) or type(e).__name__
+        raise InputError(name, "", f"not a readable gzip file ({what})",
+                         "write it again with `ehatp solve --out FILE.json.gz`") from None
+    return out
 
 def _no_control_characters(name: str, text: str) -> None:
     """Raise :class:`InputError` when a string of the policy JSON ``text`` holds a control
@@ -372,14 +396,25 @@ class Policy:
     def write(self, path: str | Path, check: Callable[[], None] | None = None) -> None:
         """Write :meth:`iter_json` to ``path`` atomically: streamed, a node at a time, into a
         new file beside it that then replaces ``path``, so a reader never sees half a policy
-        and the text is never held whole. ``check`` as in :meth:`to_dict`: when it stops the
-        work, ``path`` is left as it was and the partial file removed."""
+        and the text is never held whole. A ``path`` ending in ``.gz`` is written
+        gzip-compressed, deterministically (no time and no file name in the gzip header: the
+        same policy gives the same bytes); :meth:`load` reads either. ``check`` as in
+        :meth:`to_dict`: when it stops the work, ``path`` is left as it was and the partial
+        file removed."""
         path = Path(path)
         tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
         try:
-            with open(tmp, "x", encoding="utf-8") as fh:
-                for piece in self.iter_json(check):
-                    fh.write(piece)
+            with open(tmp, "xb") as raw:
+                if path.name.endswith(GZIP_SUFFIX):
+                    with gzip.GzipFile(filename="", mode="wb", compresslevel=6,
+                                       fileobj=raw, mtime=0) as gz, \
+                            io.TextIOWrapper(gz, encoding="utf-8", newline="") as fh:
+                        for piece in self.iter_json(check):
+                            fh.write(piece)
+                else:
+                    with io.TextIOWrapper(raw, encoding="utf-8", newline="") as fh:
+                        for piece in self.iter_json(check):
+                            fh.write(piece)
             os.replace(tmp, path)
         except BaseException:
             with contextlib.suppress(OSError):
@@ -421,12 +456,15 @@ class Policy:
         given the parsed JSON before anything reads it (a schema's check, which raises)."""
         name = str(path)
         try:
-            text = Path(path).read_text(encoding="utf-8")
+            data = Path(path).read_bytes()
         except FileNotFoundError:
             raise InputError(name, "", "no such file", POLICY_FIX) from None
         except OSError as e:
             raise InputError(name, "", f"cannot read the file ({e.strerror or e})",
                              "check the path") from None
+        try:
+            text = (_gunzip(name, data, check) if data.startswith(_GZIP_MAGIC)
+                    else data).decode("utf-8")
         except UnicodeDecodeError:
             raise InputError(name, "", "not a text file", POLICY_FIX) from None
         try:
