@@ -7,6 +7,7 @@ No timing assertions: times are recorded, never compared. The 512-variant grid i
 from __future__ import annotations
 
 import csv
+import gzip
 import importlib.util
 import json
 import sys
@@ -215,6 +216,25 @@ def test_policies_validation_and_csv(problems: Path, tmp_path: Path) -> None:
                                                sorted(rows, key=lambda r: r["instance"])]
     assert {"instance", "status", "cost", "stats.distinct", "stats.max_worlds"} <= set(lines[0])
     assert "2 rows (2 new)" in stdout and "2 solved" in stdout
+
+
+def test_compressed_policies_hold_the_same_json_and_compress_needs_a_folder(
+        problems: Path, tmp_path: Path) -> None:
+    plain, packed = tmp_path / "plain", tmp_path / "packed"
+    assert invoke(problems / "p*.toml", "--policies", plain, "--out", tmp_path / "a.jsonl")[0] == 0
+    code, _, err = invoke(problems / "p*.toml", "--policies", packed, "--compress",
+                          "--out", tmp_path / "b.jsonl")
+    assert code == 0, err
+    rows = rows_of(tmp_path / "b.jsonl")
+    assert len(rows) == 2
+    for r in rows:
+        f = Path(r["policy"])
+        assert f.name == f"{r['key']}.json.gz"
+        assert gzip.decompress(f.read_bytes()) == (plain / f"{r['key']}.json").read_bytes()
+        pol = Policy.load(f)
+        assert ehatp.validate(load(problems / Path(r["instance"]).name), pol).ok
+    code, _, err = invoke(problems / "p*.toml", "--compress", "--out", tmp_path / "c.jsonl")
+    assert code == 2 and "--compress goes with --policies" in err
 
 
 def test_resume_runs_only_missing_rows(problems: Path, grid: Path, tmp_path: Path) -> None:

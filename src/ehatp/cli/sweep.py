@@ -80,6 +80,9 @@ def sweep_command(
     policies: Annotated[Path | None, typer.Option(
         "--policies", help="Folder for the policies, one KEY.json per instance.",
         metavar="DIR", show_default=False)] = None,
+    compress: Annotated[bool, typer.Option(
+        "--compress", help="With --policies: write each policy gzip-compressed, "
+                           "KEY.json.gz.")] = False,
     out: Annotated[Path | None, typer.Option(
         "--out", "-o", help="Results, one JSON line per instance (default results.jsonl); "
                             "with --plot, the picture (default: RESULTS.png).",
@@ -117,8 +120,10 @@ def sweep_command(
     results = out if out is not None else Path("results.jsonl")
     files, grid_values = _inputs(patterns, grid, results, resume, memory, policies, csv_out)
     marks = results.with_name(f".{results.name}.marks")
+    if compress and policies is None:
+        die("--compress goes with --policies DIR (it compresses the policy files)")
     settings = Settings(timeout=timeout, memory_gb=memory, validate=validate,
-                        policies=policies, marks=marks,
+                        policies=policies, compress=compress, marks=marks,
                         memory_mode="rlimit" if executor is ExecutorKind.local else "watch")
     tasks = make_tasks(files, grid_values, settings)
     ordered, new = _run_missing(tasks, results, marks, resume, executor, workers, address)

@@ -228,6 +228,7 @@ class Settings:
     kill_after: float | None = None  # None: sweep_worker.kill_after(timeout)
     validate: bool = False
     policies: Path | None = None
+    compress: bool = False  # the policies gzip-compressed: KEY.json.gz
     marks: Path | None = None
 
 
@@ -250,6 +251,7 @@ def make_tasks(files: Sequence[Path], grid: Grid | None, settings: Settings) -> 
                 kill_after=settings.kill_after,
                 validate=settings.validate,
                 policies=None if settings.policies is None else str(settings.policies.resolve()),
+                compress=settings.compress,
                 marks=None if settings.marks is None else str(settings.marks.resolve()),
                 driver_pid=here[0], driver_host=here[1]))
     return tasks

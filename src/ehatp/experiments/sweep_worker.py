@@ -81,6 +81,7 @@ class Task:
     kill_after: float | None = None  # seconds; None: :func:`kill_after` of the time limit
     validate: bool = False
     policies: str | None = None  # folder for the policy files
+    compress: bool = False  # write them gzip-compressed (KEY.json.gz)
     marks: str | None = None  # folder where a watchdog leaves a note before ending its worker
     driver_pid: int = 0  # never end this process (a worker thread inside the driver)
     driver_host: str = ""
@@ -173,10 +174,8 @@ def _solve_into(row: dict[str, Any], task: Task, watchdog: Watchdog) -> None:
             report = validate(prob, pol)
             row.update(valid=report.ok, validation=None if report.ok else report.message)
         if task.policies is not None:
-            target = Path(task.policies) / f"{task.key}.json"
-            tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
-            tmp.write_text(pol.to_json(), encoding="utf-8")
-            os.replace(tmp, target)  # whole or absent, even if two runs write it
+            target = Path(task.policies) / f"{task.key}.json{'.gz' if task.compress else ''}"
+            pol.write(target)  # whole or absent, even if two runs write it
             row["policy"] = str(target)
         row.update(cost=num(pol.cost), communications=pol.communications, leaves=pol.leaves,
                    worst_case=None if pol.worst_case is None else num(pol.worst_case),
