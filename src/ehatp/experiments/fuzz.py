@@ -8,11 +8,13 @@ of these cases in the suite; ``benchmarks/fuzz.py`` runs thousands (both run a c
 ``tests/fuzzing.py``'s ``run_case``: the command line is above this layer).
 
 A case is a text mutated from a valid seed file (:func:`mutate_text`: cut, repeat, insert
-syntax and hostile values) or, for JSON, a value replaced deep inside (:func:`mutate_json`).
+syntax and hostile values) or, for JSON, a value replaced deep inside (:func:`mutate_json`);
+a compressed policy has its text mutated, or its gzip bytes changed and cut.
 """
 
 from __future__ import annotations
 
+import gzip
 import json
 import random
 from dataclasses import dataclass
@@ -102,7 +104,7 @@ def mutate_json(doc: Any, rng: random.Random, edits: int = 2) -> Any:
     return doc
 
 
-KINDS = ("problem", "policy", "policy-json", "sidecar", "hddl", "execute")
+KINDS = ("problem", "policy", "policy-json", "policy-gz", "sidecar", "hddl", "execute")
 """The kinds of input :func:`fuzz_case` mutates."""
 
 
@@ -129,14 +131,27 @@ def fuzz_case(kind: str, seeds: Seeds, rng: random.Random,
                                  edits=rng.randrange(1, 4)), encoding="utf-8")
         return ["solve", str(f), "--timeout", "5", "--max-states", "3000",
                 "--out", out + ".json"], None
-    if kind in ("policy", "policy-json"):
+    if kind in ("policy", "policy-json", "policy-gz"):
         text = seeds.policy.read_text(encoding="utf-8")
-        if kind == "policy":
-            text = mutate_text(text, rng, edits=rng.randrange(1, 4))
+        if kind == "policy-gz":  # a compressed policy: its text mutated, or its bytes
+            f = folder / "p.json.gz"
+            of_text = rng.randrange(2) == 1
+            data = bytearray(gzip.compress(
+                (mutate_text(text, rng) if of_text else text).encode("utf-8"), mtime=0))
+            for _ in range(0 if of_text else rng.randrange(1, 4)):
+                i = rng.randrange(len(data))
+                if rng.randrange(2):
+                    data[i] = rng.randrange(256)
+                else:
+                    del data[i:i + rng.randrange(1, 40)]
+            f.write_bytes(bytes(data))
         else:
-            text = json.dumps(mutate_json(json.loads(text), rng, edits=rng.randrange(1, 3)))
-        f = folder / "p.json"
-        f.write_text(text, encoding="utf-8")
+            if kind == "policy":
+                text = mutate_text(text, rng, edits=rng.randrange(1, 4))
+            else:
+                text = json.dumps(mutate_json(json.loads(text), rng, edits=rng.randrange(1, 3)))
+            f = folder / "p.json"
+            f.write_text(text, encoding="utf-8")
         command = rng.choice((["show", str(f)], ["validate", str(seeds.problem), str(f)],
                               ["render", str(f), "--format", "dot", "--out", out + ".dot"],
                               ["export", "bt", str(f), "--out", out + ".xml"]))
