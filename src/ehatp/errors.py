@@ -89,6 +89,17 @@ class HddlMissing(EhatpError):
     """unified-planning, which reads HDDL, is not installed."""
 
 
+class PolicyTooLarge(EhatpError):
+    """A lifted policy (format version 3) stands for more nodes over the real objects than a
+    reader that needs them all was allowed to make (``limit``); ``canonical`` is the lifted
+    policy's own node count. ``str(e)`` says so in words."""
+
+    def __init__(self, limit: int, canonical: int) -> None:
+        self.limit, self.canonical = limit, canonical
+        super().__init__(f"the lifted policy ({canonical:,} canonical nodes) stands for more "
+                         f"than {limit:,} nodes over the real objects")
+
+
 class DotMissing(EhatpError):
     """Graphviz's ``dot`` program is not installed (``ehatp render --format svg``)."""
 
@@ -98,5 +109,5 @@ class ExamplesNotFound(EhatpError):
 
 
 __all__ = ["DomainError", "DotMissing", "EhatpError", "ExamplesNotFound", "ExecutionError",
-           "HddlMissing", "HddlUnsupported", "InputError", "PolicyMismatch",
+           "HddlMissing", "HddlUnsupported", "InputError", "PolicyMismatch", "PolicyTooLarge",
            "UncoveredHumanAction", "control_char", "printable"]

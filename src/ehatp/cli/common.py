@@ -90,6 +90,16 @@ def load_policy(path: Path, problem: Path | None = None, *, counts: bool = True,
     return pol
 
 
+EXPAND_LIMIT_HELP = ("How many nodes over the real objects a lifted policy (format version 3) "
+                     "may expand to here (0: no limit); past it, what needs the whole graph "
+                     "is left out or refused, in one line.")
+
+
+def expand_limit(n: int) -> int | None:
+    """``--expand-limit N`` as the readers take it: None (no limit) for 0."""
+    return n or None
+
+
 def memory_option(text: str | None) -> int | None:
     """Return ``--max-memory TEXT`` in bytes (None when not given); a size that does not read
     is one line, exit 2."""

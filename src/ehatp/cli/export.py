@@ -7,7 +7,7 @@ from pathlib import Path
 
 import typer
 
-from ..errors import InputError
+from ..errors import InputError, PolicyTooLarge
 from ..formats.bt import (
     BTFormat,
     NotExpressible,
@@ -16,9 +16,17 @@ from ..formats.bt import (
     to_btcpp,
     to_py_trees_source,
 )
+from ..formats.lifted import EXPAND_LIMIT
 from ..formats.policy_check import check_policy_problem, read_policy
 from ..run.expand import expand_policy
-from .common import command_app, load_problem, user_errors, write_output
+from .common import (
+    EXPAND_LIMIT_HELP,
+    command_app,
+    expand_limit,
+    load_problem,
+    user_errors,
+    write_output,
+)
 
 app = command_app(name="export", help="Write a policy in another tool's format.",
                   no_args_is_help=True)
@@ -36,6 +44,8 @@ def export_bt(
         None, "--problem", "-p", metavar="PROBLEM.toml",
         help="The problem the policy was planned for: checked, and used to write the robot's "
              "answers (yes/no) to the human's questions.", show_default=False),
+    limit: int = typer.Option(EXPAND_LIMIT, "--expand-limit", min=0, metavar="N",
+                              help=EXPAND_LIMIT_HELP),
 ) -> None:
     """Write a policy as a behaviour tree: robot moves are action nodes, each human choice a
     wait for the human's action then a Fallback over what the human did, shared states
@@ -43,15 +53,22 @@ def export_bt(
     with user_errors(policy):
         pol = read_policy(policy)
     answers = None
+    too_large = ("raise --expand-limit (a behaviour tree holds every branch), or run the "
+                 "policy with `ehatp execute`, which realises only the branch it follows")
     if problem is not None:
         prob = load_problem(problem)
         with user_errors(policy):
             check_policy_problem(pol, policy, prob)
-            pol = expand_policy(prob, pol)  # a lifted policy: its graph on the real objects
+            try:  # a lifted policy: its graph on the real objects
+                pol = expand_policy(prob, pol, max_nodes=expand_limit(limit))
+            except PolicyTooLarge as e:
+                raise InputError(str(policy), "", str(e), too_large) from None
             answers = answers_of(prob, pol)
     with user_errors(policy):
         try:
-            forest = from_policy(pol, answers)
+            forest = from_policy(pol, answers, expand_limit(limit))
+        except PolicyTooLarge as e:
+            raise InputError(str(policy), "", str(e), too_large) from None
         except NotExpressible as e:
             raise InputError(str(policy), "", str(e), e.fix) from None
         except ValueError as e:

@@ -3,15 +3,24 @@
 
 from __future__ import annotations
 
+import contextlib
 from pathlib import Path
 
 import typer
 
-from ..errors import DotMissing, printable
-from ..formats.lifted import expanded
+from ..errors import DotMissing, PolicyTooLarge, printable
+from ..formats.lifted import EXPAND_LIMIT, expanded
 from ..formats.policy_check import check_consistent, check_policy_problem, read_policy
 from ..formats.render import DEFAULT_MAX_NODES, Format, render, static_facts
-from .common import command_app, die, load_problem, user_errors, write_output
+from .common import (
+    EXPAND_LIMIT_HELP,
+    command_app,
+    die,
+    expand_limit,
+    load_problem,
+    user_errors,
+    write_output,
+)
 
 app = command_app()
 
@@ -34,6 +43,8 @@ def render_command(
                                         help="Check that the policy was planned for this "
                                              "problem file; label moves as on its objects, and "
                                              "list its static facts in the explorer."),
+    limit: int = typer.Option(EXPAND_LIMIT, "--expand-limit", min=0, metavar="N",
+                              help=EXPAND_LIMIT_HELP),
 ) -> None:
     """Draw a policy as Graphviz DOT or SVG, or as a self-contained HTML explorer.
 
@@ -54,18 +65,24 @@ def render_command(
         if prob is not None and pol.symmetry is not None:  # lifted: the problem's own labels
             from ..run.expand import expand_policy
 
-            pol = expand_policy(prob, pol)
+            # past the limit it is drawn lifted, realised only as far as it is drawn
+            with contextlib.suppress(PolicyTooLarge):
+                pol = expand_policy(prob, pol, max_nodes=expand_limit(limit))
     with user_errors(policy):
         try:
             static = static_facts(prob) if prob is not None and fmt is Format.html else None
             text, notes = render(pol, fmt, max_depth=max_depth, max_nodes=max_nodes,
-                                 share=share, static=static)
+                                 share=share, static=static, expand_limit=expand_limit(limit))
         except DotMissing as e:
             die(str(e))
     if notes and out is None:
         typer.echo(printable(f"render: {policy}: collapsed: {'; '.join(notes)}"), err=True)
     kind = {Format.dot: "Graphviz DOT", Format.svg: "SVG", Format.html: "HTML explorer"}[fmt]
-    what = f"{kind} of {pol.problem}, {len(expanded(pol).nodes):,} policy nodes"
+    try:
+        size = f"{len(expanded(pol, expand_limit(limit)).nodes):,} policy nodes"
+    except PolicyTooLarge:
+        size = f"lifted, {len(pol.nodes):,} canonical nodes"
+    what = f"{kind} of {pol.problem}, {size}"
     if notes:
         what += f" (collapsed: {'; '.join(notes)})"
     write_output(text, out, what, command="render")

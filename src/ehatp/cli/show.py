@@ -3,13 +3,15 @@
 
 from __future__ import annotations
 
+import contextlib
 import sys
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from .common import command_app, load_policy, write_stdout
+from ..formats.lifted import EXPAND_LIMIT
+from .common import EXPAND_LIMIT_HELP, command_app, expand_limit, load_policy, write_stdout
 
 app = command_app()
 
@@ -30,6 +32,8 @@ def show_cmd(
     problem: Annotated[Path | None, typer.Option(
         "--problem", "-p", help="Check that the policy was planned for this problem file.",
         metavar="PROBLEM.toml", show_default=False)] = None,
+    limit: Annotated[int, typer.Option(
+        "--expand-limit", min=0, metavar="N", help=EXPAND_LIMIT_HELP)] = EXPAND_LIMIT,
 ) -> None:
     """Print a policy as an indented tree and the timelines of its branches (the first 100).
 
@@ -50,14 +54,17 @@ def show_cmd(
     """
     pol = load_policy(policy, problem, consistent=True)
     if problem is not None and pol.symmetry is not None:  # lifted: its real labels
+        from ..errors import PolicyTooLarge
         from ..run.expand import expand_policy
         from .common import load_problem, user_errors
 
-        with user_errors(policy):
-            pol = expand_policy(load_problem(problem), pol)
+        # too large to print whole: its branches are realised one at a time (policy_lines)
+        with user_errors(policy), contextlib.suppress(PolicyTooLarge):
+            pol = expand_policy(load_problem(problem), pol, max_nodes=expand_limit(limit))
     from ..formats.text import plain, policy_lines, print_rich
 
-    lines = policy_lines(pol, tree=tree, timelines=timelines, details=details)
+    lines = policy_lines(pol, tree=tree, timelines=timelines, details=details,
+                         expand_limit=expand_limit(limit))
     if sys.stdout.isatty():
         from rich.console import Console
 

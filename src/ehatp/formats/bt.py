@@ -162,18 +162,21 @@ MAX_NESTED_CHOICES = 60
 MAX_DEPTH = 4 + 2 * MAX_NESTED_CHOICES
 
 
-def from_policy(policy: Policy, answers: dict[tuple[int, str], bool] | None = None) -> Forest:
+def from_policy(policy: Policy, answers: dict[tuple[int, str], bool] | None = None,
+                expand_limit: int | None = None) -> Forest:
     """Return the behaviour tree of ``policy``. ``answers`` maps (policy node, question asked
     there) to the robot's truthful answer (:func:`answers_of`); without it the ``Say`` of an
     answer leaves the answer to the robot. A lifted policy (format version 3) is expanded first
     (:func:`~ehatp.formats.lifted.expanded`; give the expansion of
-    :func:`ehatp.run.expand.expand_policy` when ``answers`` come from :func:`answers_of`).
+    :func:`ehatp.run.expand.expand_policy` when ``answers`` come from :func:`answers_of`):
+    past ``expand_limit`` nodes over the real objects, :class:`~ehatp.errors.PolicyTooLarge`
+    (a tree holds every branch).
 
     A human choice with one covered move does not nest: its ``Fallback`` holds the check of
     that move (and the robot's answer), and the policy goes on after it in the same
     ``Sequence``. Past ``MAX_NESTED_CHOICES`` nested choices with several moves, a branch goes
     on in a tree of its own, so every tree is at most ``MAX_DEPTH`` elements deep."""
-    policy = expanded(policy)
+    policy = expanded(policy, expand_limit)
     wait_human = "WaitHumanStart" if joint(policy) else "WaitHumanAction"
     own = set(shared_nodes(policy))  # the nodes with a tree of their own
     robot = policy.agents["robot"]

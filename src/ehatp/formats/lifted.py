@@ -20,17 +20,22 @@ from __future__ import annotations
 
 import json
 import re
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import replace
 from typing import Any
 
-from .policy import Policy, PolicyMove, PolicyNode
+from ..errors import PolicyTooLarge
+from .policy import PathStep, Policy, PolicyMove, PolicyNode
 
 Perm = tuple[int, ...]  # the image of each object, by index into symmetry.objects
 
 # an object name in a label or a fact (the planner's own tokenisation, search/symmetry.py)
 TOKEN = re.compile(r"[^\s(),=\[\]<>!|{}+;:]+")
 _CACHE = 4096  # node views kept per Renamings (a walk revisits the same few)
+EXPAND_LIMIT = 20_000
+"""How many nodes over the real objects the readers that need a lifted policy whole (``ehatp
+show``'s tree, ``render``, ``export bt``) make at most by default (``--expand-limit``): at 16
+cubes / 2 boxes / K=2 the 413 canonical nodes stand for 795,237, which took 196 s."""
 
 
 class Renamings:
@@ -170,7 +175,7 @@ def renamings(policy: Policy, atoms: Mapping[str, int] | None = None,
 
 def expand(policy: Policy, atoms: Mapping[str, int] | None = None,
            tasks: Mapping[str, int] | None = None,
-           check: Callable[[], None] | None = None) -> Policy:
+           check: Callable[[], None] | None = None, max_nodes: int | None = None) -> Policy:
     """The version 2 graph of a lifted policy (the policy itself when it is not lifted): one
     node per real state the policy reaches, ids in the depth-first preorder of first visits,
     moves in order, as ``ehatp solve`` without symmetry numbers them.
@@ -180,7 +185,8 @@ def expand(policy: Policy, atoms: Mapping[str, int] | None = None,
     below are then images of one). Values, leaves and communications are those of the lifted
     graph (a renaming keeps costs and counts). ``atoms``/``tasks`` (the ground problem's
     indices by name) list the facts in the problem's order; ``check`` is called once per real
-    node and may raise to stop the work."""
+    node and may raise to stop the work; past ``max_nodes`` real nodes it raises
+    :class:`~ehatp.errors.PolicyTooLarge`."""
     ren = renamings(policy, atoms, tasks)
     if ren is None:
         return policy
@@ -206,6 +212,8 @@ def expand(policy: Policy, atoms: Mapping[str, int] | None = None,
             continue
         if check is not None:
             check()
+        if max_nodes is not None and len(order) >= max_nodes:
+            raise PolicyTooLarge(max_nodes, len(policy.nodes))
         index[k] = len(order)
         order.append((n, tau))
         for m in reversed(policy.nodes[n].moves):
@@ -222,11 +230,36 @@ def expand(policy: Policy, atoms: Mapping[str, int] | None = None,
     return out
 
 
-def expanded(policy: Policy) -> Policy:
+def expanded(policy: Policy, max_nodes: int | None = None) -> Policy:
     """``policy`` as a version 2 graph, for the readers that draw or print the whole graph
     (``ehatp show``, ``render``, ``export bt``): :func:`expand` without the problem (facts keep
-    their canonical positions), the policy itself when it is not lifted."""
-    return expand(policy) if policy.symmetry is not None else policy
+    their canonical positions), the policy itself when it is not lifted. Past ``max_nodes``
+    real nodes, :class:`~ehatp.errors.PolicyTooLarge`."""
+    return expand(policy, max_nodes=max_nodes) if policy.symmetry is not None else policy
 
 
-__all__ = ["TOKEN", "Perm", "Renamings", "expand", "expanded", "renamings"]
+def real_branches(policy: Policy) -> Iterator[list[PathStep]]:
+    """Every root-to-leaf branch of ``policy`` over the real objects, lazily, in move order,
+    as :meth:`Policy.iter_branches` gives them for its expansion (the same nodes and moves,
+    facts in their canonical positions; a node's ``id`` is its canonical node's): each branch
+    realised by composing the renamings along it, never the whole graph (docs/policy-format.md,
+    "Version 3"). A policy that is not lifted gives its own branches."""
+    ren = renamings(policy)
+    if ren is None:
+        yield from policy.iter_branches()
+        return
+    nodes = policy.nodes
+    stack: list[tuple[list[PathStep], Perm]] = [
+        ([PathStep(None, ren.node(ren.root, nodes[0]))], ren.root)]
+    while stack:
+        path, tau = stack.pop()
+        last = path[-1].node
+        if not last.moves:
+            yield path
+        for m in reversed(last.moves):  # a view's move keeps its canonical to and renaming
+            child = ren.child(tau, m.renaming)
+            stack.append(([*path, PathStep(m, ren.node(child, nodes[m.to]))], child))
+
+
+__all__ = ["EXPAND_LIMIT", "TOKEN", "Perm", "Renamings", "expand", "expanded", "real_branches",
+           "renamings"]

@@ -24,16 +24,16 @@ import re
 import shutil
 import subprocess
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import StrEnum
 from html import escape as html_escape
 from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..errors import DotMissing, printable
+from ..errors import DotMissing, PolicyTooLarge, printable
 from ..model.problem import call_str
-from .lifted import expanded
+from .lifted import EXPAND_LIMIT, Perm, expanded, renamings
 from .policy import COMM_KINDS, Policy, PolicyMove, PolicyNode
 from .policy_check import read_policy
 
@@ -70,6 +70,9 @@ class View:
     notes: list[str] = field(default_factory=list)
     # drawn id -> the moves into it, from anywhere in the policy (into the nodes it stands for)
     entering: dict[int, list[PolicyMove]] = field(default_factory=dict)
+    # a lifted policy drawn without its expansion (lifted_view): ``folded`` counts canonical
+    # nodes, ``entering`` only the moves drawn, and the title says how far the drawing went
+    lifted: str = ""
 
     @property
     def collapsed(self) -> bool:
@@ -171,6 +174,99 @@ def plan_view(policy: Policy, *, max_depth: int | None = None,
     return View(order, edges, folded, stands_for, notes, entering)
 
 
+def lifted_view(policy: Policy, too_large: PolicyTooLarge, *, max_depth: int | None = None,
+                max_nodes: int | None = DEFAULT_MAX_NODES) -> tuple[Policy, View]:
+    """Decide what to draw of a lifted policy too large to expand (``too_large``), realising
+    only what is drawn (docs/policy-format.md, "Version 3"): the breadth-first walk of
+    :func:`plan_view` over the real nodes, each a canonical node seen through the renaming of
+    the path that first reached it (two paths to one real state give one node, as
+    :func:`~ehatp.formats.lifted.expand` merges them), down to ``max_depth`` and while the
+    budget lasts (all children or none). Return the drawn nodes as a policy (ids in the walk's
+    order; a folded node's moves are not followed) and the view. Unlike :func:`plan_view`, no
+    identical subgraphs are merged, a stub counts the canonical nodes below, and a node's
+    entering moves are those drawn."""
+    ren = renamings(policy)
+    assert ren is not None
+    nodes = policy.nodes
+    budget = DEFAULT_MAX_NODES if max_nodes is None else max_nodes
+    ids: dict[tuple[int, str], int] = {}
+    real: list[tuple[int, Perm]] = []
+    views: list[PolicyNode] = []
+
+    def realise(n: int, tau: Perm) -> int:
+        view = ren.node(tau, nodes[n])
+        d = view.to_dict()
+        for m in d["moves"]:
+            del m["to"]
+            m.pop("renaming", None)
+        key = (n, json.dumps(d, sort_keys=True))
+        i = ids.get(key)
+        if i is None:
+            i = ids[key] = len(views)
+            real.append((n, tau))
+            views.append(view)
+        return i
+
+    realise(0, ren.root)
+    depth = {0: 0}
+    order = [0]
+    edges: list[tuple[int, int, int]] = []
+    cut: list[int] = []
+    cut_depth = cut_budget = 0
+    kids_of: dict[int, list[int]] = {}
+    queue = deque([0])
+    while queue:
+        i = queue.popleft()
+        n, tau = real[i]
+        if not views[i].moves:
+            continue
+        if max_depth is not None and depth[i] >= max_depth:
+            cut.append(i)
+            cut_depth += 1
+            continue
+        kids = kids_of[i] = [realise(m.to, ren.child(tau, m.renaming)) for m in views[i].moves]
+        new = list(dict.fromkeys(k for k in kids if k not in depth))
+        if len(order) + len(new) > budget:
+            cut.append(i)
+            cut_budget += 1
+            continue
+        edges.extend((i, k, j) for j, k in enumerate(kids))
+        for k in new:
+            depth[k] = depth[i] + 1
+            order.append(k)
+            queue.append(k)
+    drawn_nodes: list[PolicyNode] = []
+    for i, view in enumerate(views):
+        below = kids_of.get(i)
+        moves = (view.moves if below is None else
+                 [replace(m, to=k, renaming=0) for m, k in zip(view.moves, below, strict=True)])
+        drawn_nodes.append(replace(view, id=i, moves=moves))
+    drawn = replace(policy, nodes=drawn_nodes, symmetry=None)
+    folded = {i: _canonical_below(policy, real[i][0]) for i in cut}
+    notes = [f"lifted, drawn without its expansion: {too_large}"]
+    if cut_depth:
+        notes.append(f"cut at depth {max_depth} ({cut_depth} node(s) folded)")
+    if cut_budget:
+        notes.append(f"node budget {budget} reached ({cut_budget} node(s) folded)")
+    entering: dict[int, list[PolicyMove]] = {}
+    for a, b, j in edges:
+        entering.setdefault(b, []).append(drawn_nodes[a].moves[j])
+    return drawn, View(order, edges, folded, {}, notes, entering,
+                       lifted=f"{len(policy.nodes):,} canonical nodes, {len(order):,} drawn")
+
+
+def _canonical_below(policy: Policy, n: int) -> int:
+    """Distinct canonical nodes below the canonical node ``n`` of a lifted policy."""
+    seen: set[int] = set()
+    stack = [n]
+    while stack:
+        for m in policy.nodes[stack.pop()].moves:
+            if m.to not in seen:
+                seen.add(m.to)
+                stack.append(m.to)
+    return len(seen)
+
+
 # --------------------------------------------------------------------------- DOT / SVG
 
 _ROBOT_STYLE = {"shape": "box", "style": "rounded,filled", "fillcolor": "#d6e6ff",
@@ -263,9 +359,9 @@ def to_dot(policy: Policy, view: View | None = None) -> graphviz.Digraph:
     policy = expanded(policy)
     view = view or plan_view(policy, max_nodes=None, share=False)
     kind = "expected" if policy.objective.get("kind") == "expected" else "worst-case"
+    size = view.lifted or f"{len(policy.nodes)} nodes"
     title = (f"{policy.problem} ({policy.domain}): {kind} cost {policy.cost}, "
-             f"{policy.leaves} branches, {policy.communications} communication(s); "
-             f"{len(policy.nodes)} nodes")
+             f"{policy.leaves} branches, {policy.communications} communication(s); {size}")
     label = "\\l".join(_dot_text(x) for x in [title, *(f"collapsed: {t}" for t in view.notes)])
     text = graphviz.nohtml  # every value is text: "<b>x</b>" is not an HTML-like label
     g = graphviz.Digraph(name=re.sub(r"\W", "_", policy.problem) or "policy")
@@ -278,7 +374,9 @@ def to_dot(policy: Policy, view: View | None = None) -> graphviz.Digraph:
         shown = node_attrs(policy, policy.nodes[i], into.get(i, []), view.stands_for.get(i, 1))
         g.node(f"n{i}", **{k: text(v) for k, v in shown.items()})
         if i in view.folded:
-            g.node(f"more{i}", label=f"… {view.folded[i]} more", shape="note",
+            more = (f"… more below ({view.folded[i]} canonical nodes)" if view.lifted
+                    else f"… {view.folded[i]} more")
+            g.node(f"more{i}", label=more, shape="note",
                    style="dashed", color="#888888", fontcolor="#555555")
             g.edge(f"n{i}", f"more{i}", style="dashed", color="#888888")
     human = policy.agents["human"]
@@ -354,16 +452,23 @@ def to_html(policy: Policy, *, max_depth: int | None = None,
 
 def render(path: str | Path | Policy, fmt: Format = Format.dot, *, max_depth: int | None = None,
            max_nodes: int | None = DEFAULT_MAX_NODES, share: bool | None = None,
-           static: list[str] | None = None) -> tuple[str, list[str]]:
+           static: list[str] | None = None,
+           expand_limit: int | None = EXPAND_LIMIT) -> tuple[str, list[str]]:
     """Return the rendered text and the collapse notes (empty when drawn whole). A path is
     read with its structure checked (:func:`~ehatp.formats.policy_check.read_policy`); a
     lifted policy (format version 3) is drawn expanded
-    (:func:`~ehatp.formats.lifted.expanded`). ``static``: the explorer's static facts
-    (:func:`to_html`)."""
-    policy = expanded(path if isinstance(path, Policy) else read_policy(path))
+    (:func:`~ehatp.formats.lifted.expanded`), or, past ``expand_limit`` nodes over the real
+    objects, realised only as far as it is drawn (:func:`lifted_view`). ``static``: the
+    explorer's static facts (:func:`to_html`)."""
+    policy = path if isinstance(path, Policy) else read_policy(path)
     if fmt is Format.html:
         return to_html(policy, max_depth=max_depth, max_nodes=max_nodes, static=static), []
-    view = plan_view(policy, max_depth=max_depth, max_nodes=max_nodes, share=share)
+    try:
+        policy = expanded(policy, expand_limit)
+    except PolicyTooLarge as e:
+        policy, view = lifted_view(policy, e, max_depth=max_depth, max_nodes=max_nodes)
+    else:
+        view = plan_view(policy, max_depth=max_depth, max_nodes=max_nodes, share=share)
     dot = to_dot(policy, view)
     return (dot.source if fmt is Format.dot else to_svg(dot)), view.notes
 

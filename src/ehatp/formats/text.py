@@ -13,15 +13,15 @@ files, tests) and :func:`print_rich` colours it on a terminal, so both show the 
 from __future__ import annotations
 
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
-from ..errors import printable
+from ..errors import PolicyTooLarge, printable
 from ..model.problem import Problem
-from .lifted import expanded
-from .policy import COMM_KINDS, Policy, PolicyMove, PolicyNode, timeline
+from .lifted import EXPAND_LIMIT, expanded, real_branches
+from .policy import COMM_KINDS, PathStep, Policy, PolicyMove, PolicyNode, timeline
 
 if TYPE_CHECKING:
     from rich.console import Console
@@ -115,7 +115,9 @@ def _detail_segments(n: PolicyNode) -> list[Segment]:
     return [("      " + "; ".join(parts), "dim italic")] if parts else []
 
 
-def header(policy: Policy) -> list[Line]:
+def header(policy: Policy, too_large: PolicyTooLarge | None = None) -> list[Line]:
+    """The lines above the tree: the problem, the costs and counts, the search's figures, the
+    graph's size (``too_large``: a lifted policy not expanded, and why) and the legend."""
     r, h = policy.agents["robot"], policy.agents["human"]
     opt = ("optimal" if policy.optimal
            else "NOT proven optimal (the search stopped early)")
@@ -133,8 +135,13 @@ def header(policy: Policy) -> list[Line]:
                                 f"{st.get('distinct', '?')} distinct, "
                                 f"|W| up to {st.get('max_worlds', '?')}", "dim")]))
     moves = sum(len(n.moves) for n in policy.nodes)
-    lines.append(Line((), [(f"graph: {len(policy.nodes)} nodes, {moves} moves "
-                            f"({policy.tree_size()} nodes as a tree)", "dim")]))
+    if too_large is None:
+        lines.append(Line((), [(f"graph: {len(policy.nodes)} nodes, {moves} moves "
+                                f"({policy.tree_size()} nodes as a tree)", "dim")]))
+    else:
+        lines.append(Line((), [(f"graph: lifted, {len(policy.nodes)} canonical nodes, {moves} "
+                                f"moves ({policy.tree_size()} nodes as a tree); more than "
+                                f"{too_large.limit:,} nodes over the real objects", "dim")]))
     lines.append(Line((), [(f"legend: {r} = robot, {h} = human, COMM = communication, "
                             "GOAL = goal reached, W = worlds the human entertains, "
                             "apart = not co-present, → see node N = a node printed above "
@@ -186,16 +193,19 @@ def tree_lines(policy: Policy, details: bool = False) -> list[Line]:
     return out
 
 
-def timeline_lines(policy: Policy, limit: int | None = MAX_TIMELINES) -> list[Line]:
+def timeline_lines(policy: Policy, limit: int | None = MAX_TIMELINES,
+                   branches: Iterable[list[PathStep]] | None = None) -> list[Line]:
     """One numbered timeline per branch (the first ``limit`` of them): turns while together,
-    lanes while apart."""
+    lanes while apart. ``branches``: the branches to print (default the policy's own; a lifted
+    policy's realised lazily, :func:`~ehatp.formats.lifted.real_branches`, whose leaves are
+    numbered by their canonical nodes)."""
     total = policy.leaves
     shown = total if limit is None else min(total, limit)
     title = f"Timelines ({total} branches" + (
         f"; the first {shown} are shown)" if shown < total else ")")
     out = [Line((), [(title, "bold")])]
     name_w = max(len(a) for a in policy.agents.values())
-    for b, path in enumerate(policy.iter_branches(), 1):
+    for b, path in enumerate(policy.iter_branches() if branches is None else branches, 1):
         if limit is not None and b > limit:
             break
         tl = timeline(policy, path)
@@ -220,20 +230,37 @@ def timeline_lines(policy: Policy, limit: int | None = MAX_TIMELINES) -> list[Li
                                      (agent.ljust(name_w) + "  ", _role(policy, agent)),
                                      (step["action"], "")]))
     if shown < total:
-        out.append(Line((), [(f"... and {total - shown} more branches: the policy's graph "
-                              "above covers them all; `ehatp render --format html` shows any "
-                              "branch", "dim")]))
+        covered = ("the policy's graph above covers them all" if branches is None
+                   else "`ehatp simulate` follows any of them")
+        out.append(Line((), [(f"... and {total - shown} more branches: {covered}; "
+                              "`ehatp render --format html` shows any branch", "dim")]))
     return out
 
 
 def policy_lines(policy: Policy, *, tree: bool = True, timelines: bool = True,
-                 details: bool = False, max_timelines: int | None = MAX_TIMELINES
-                 ) -> list[Line]:
+                 details: bool = False, max_timelines: int | None = MAX_TIMELINES,
+                 expand_limit: int | None = EXPAND_LIMIT) -> list[Line]:
     """The lines of ``ehatp show``; a lifted policy (format version 3) is expanded first
-    (:func:`~ehatp.formats.lifted.expanded`). A policy in joint steps (docs/concurrent.md)
-    is printed a step a line (:func:`joint_tree_lines`, :func:`joint_timeline_lines`), with
-    its preference vectors when it has them (:class:`Preferences`)."""
-    policy = expanded(policy)
+    (:func:`~ehatp.formats.lifted.expanded`), unless it stands for more than ``expand_limit``
+    nodes over the real objects: then the tree is left out (said in one line) and the
+    timelines' branches are realised one at a time (:func:`~ehatp.formats.lifted.real_branches`),
+    so the work is the branches printed, not the expansion. A policy in joint steps
+    (docs/concurrent.md) is printed a step a line (:func:`joint_tree_lines`,
+    :func:`joint_timeline_lines`), with its preference vectors when it has them
+    (:class:`Preferences`)."""
+    try:
+        policy = expanded(policy, expand_limit)
+    except PolicyTooLarge as e:
+        lines = header(policy, e)
+        if tree:
+            lines += [Line((), []), Line((), [("Tree", "bold")]), Line((), [(
+                f"not printed: {e}; `--expand-limit` raises the limit, `ehatp render "
+                "--format html` browses it, `ehatp simulate` follows a branch (leaves below "
+                "are numbered by the lifted policy's canonical nodes)", "dim")])]
+        if timelines:
+            lines += [Line((), []), *timeline_lines(policy, max_timelines,
+                                                    real_branches(policy))]
+        return lines
     if joint(policy):
         return joint_policy_lines(policy, tree=tree, timelines=timelines, details=details,
                                   max_timelines=max_timelines)

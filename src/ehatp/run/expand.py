@@ -15,17 +15,20 @@ import dataclasses
 from collections.abc import Callable
 
 from ..epistemic.state import EState
+from ..errors import PolicyTooLarge
 from ..formats.policy import Policy, PolicyNode
 from ..model.problem import Problem
 from .executor import Executor
 
 
 def expand_policy(problem: Problem, policy: Policy,
-                  check: Callable[[], None] | None = None) -> Policy:
+                  check: Callable[[], None] | None = None,
+                  max_nodes: int | None = None) -> Policy:
     """Return the version 2 graph of ``policy`` for ``problem`` (``policy`` itself when it is
     not lifted): ids in the depth-first preorder of first visits, moves in order, values and
     counts those of the lifted graph (a renaming keeps them). ``check`` is called once per
-    real node and may raise to stop the work. Raises the executor's errors
+    real node and may raise to stop the work; past ``max_nodes`` real nodes it raises
+    :class:`~ehatp.errors.PolicyTooLarge`. Raises the executor's errors
     (:class:`~ehatp.errors.PolicyMismatch`) when the policy does not fit the problem."""
     if policy.symmetry is None:
         return policy
@@ -41,6 +44,8 @@ def expand_policy(problem: Problem, policy: Policy,
             continue
         if check is not None:
             check()
+        if max_nodes is not None and len(views) >= max_nodes:
+            raise PolicyTooLarge(max_nodes, len(policy.nodes))
         node = ex.node
         assert node is not None
         index[ex.state] = len(views)
