@@ -196,7 +196,7 @@ class Bounds:
         while raised:
             affected = self._affected(raised)
             self.last_work += len(affected)
-            raised = self._exceeded(affected, self._pass(affected))
+            raised = self._pass(affected)
 
     def _affected(self, raised: list[int]) -> set[int]:
         """Return ``raised`` and the nodes above whose bound only they give (:meth:`revise`):
@@ -234,25 +234,11 @@ class Bounds:
                 stack.append(p)
         return affected
 
-    def _exceeded(self, affected: set[int], risen: list[int]) -> list[int]:
-        """Return the human nodes outside ``affected`` whose bound a node of ``risen`` (of
-        ``affected``) now exceeds."""
-        low, robots, into = self.low, self._robot, self._into
-        out: list[int] = []
-        met: set[int] = set()
-        for x in risen:
-            lx = low[x]
-            for p, k, _ in into[x]:
-                if (k + lx > low[p] and not robots[p] and low[p] != INF
-                        and p not in affected and p not in met):
-                    met.add(p)
-                    out.append(p)
-        return out
-
     def _pass(self, nodes: set[int]) -> list[int]:
         """Knuth's pass (:func:`~.values.knuth`) over ``nodes``, the bounds of the other nodes
         fixed: each of ``nodes`` gets the least fixpoint of its equation, infinite where the
-        pass never finalises it. Return those of ``nodes`` whose bound changed."""
+        pass never finalises it. Return the human nodes outside ``nodes`` whose bound a node
+        of ``nodes`` that rose now exceeds (found on the way up from it)."""
         gr, low, robots, kids_, into = self.gr, self.low, self._robot, self._kids, self._into
         status = gr.status
         heap: list[tuple[Bound, int]] = []
@@ -292,7 +278,8 @@ class Bounds:
                     heap.append((w, x))
         heapq.heapify(heap)
         final: set[int] = set()
-        risen: list[int] = []
+        exceeded: list[int] = []
+        met: set[int] = set()
         check = self.check
         heappush, heappop = heapq.heappush, heapq.heappop
         while heap:
@@ -302,11 +289,17 @@ class Bounds:
             final.add(x)
             if not len(final) & CHECK_EVERY:
                 check()
-            if low[x] != v:
-                low[x] = v
-                risen.append(x)
+            rose = low[x] != v
+            low[x] = v
             for p, k, m in into[x]:
-                if p not in nodes or p in final:
+                if p not in nodes:
+                    # a human node left out whose bound x, risen, now exceeds (never one of
+                    # infinite bound)
+                    if rose and v + k > low[p] and not robots[p] and p not in met:
+                        met.add(p)
+                        exceeded.append(p)
+                    continue
+                if p in final:
                     continue
                 if robots[p]:
                     heappush(heap, (v + k, p))
@@ -321,8 +314,12 @@ class Bounds:
         for x in nodes:
             if x not in final and low[x] != INF:
                 low[x] = INF
-                risen.append(x)
-        return risen
+                for p, _, _ in into[x]:
+                    if (p not in nodes and low[p] != INF and not robots[p]
+                            and p not in met):
+                        met.add(p)
+                        exceeded.append(p)
+        return exceeded
 
     def _whole_pass(self) -> None:
         """Recompute every expanded node's bound by a pass over the whole graph."""
