@@ -508,14 +508,14 @@ class Semantics:
         acts: list[tuple[int, Agenda]] = []
         asks: dict[str, Formula] = {}
         finished = False
-        for u in self.H.refine_in_all(h, states):
-            if u.worlds == full:
-                if u.op != FINISH:
-                    acts.append((u.op, u.rest))
+        for op, rest, worlds, conds in self.H.refine_in_all(h, states):
+            if worlds == full:
+                if op != FINISH:
+                    acts.append((op, rest))
                 else:
                     finished = True
-            elif cop and u.conds and self.comm.ask:
-                phi = self.uncertain_part(conj(*u.conds), states)
+            elif cop and conds and self.comm.ask:
+                phi = self.uncertain_part(conj(*conds), states)
                 asks.setdefault(self.show(phi), phi)
         if self.human_model.passes == Passes.IDLE:  # the predecessor's human: only when idle
             may_pass = not acts and not asks
