@@ -242,8 +242,9 @@ class Bounds:
         gr, low, robots, kids_, into = self.gr, self.low, self._robot, self._kids, self._into
         status = gr.status
         heap: list[tuple[Bound, int]] = []
-        remaining: dict[int, int] = {}
-        worst: dict[int, Bound] = {}
+        # human nodes: [their children in nodes not finalised yet, their greatest branch so
+        # far]
+        waiting: dict[int, list[Bound]] = {}
         for x in nodes:
             s = status[x]
             if s == GOAL:
@@ -273,49 +274,51 @@ class Bounds:
                 if not kids:  # no branch: infinite
                     continue
                 if r:
-                    remaining[x], worst[x] = r, w
+                    waiting[x] = [r, w]
                 else:
                     heap.append((w, x))
         heapq.heapify(heap)
-        final: set[int] = set()
+        final = dict.fromkeys(nodes, False)  # whether each of nodes is finalised
+        done = 0
         exceeded: list[int] = []
         met: set[int] = set()
         check = self.check
         heappush, heappop = heapq.heappush, heapq.heappop
         while heap:
             v, x = heappop(heap)
-            if x in final:
+            if final[x]:
                 continue
-            final.add(x)
-            if not len(final) & CHECK_EVERY:
+            final[x] = True
+            done += 1
+            if not done & CHECK_EVERY:
                 check()
             rose = low[x] != v
             low[x] = v
             for p, k, m in into[x]:
-                if p not in nodes:
+                f = final.get(p)
+                if f is None:
                     # a human node left out whose bound x, risen, now exceeds (never one of
                     # infinite bound)
                     if rose and v + k > low[p] and not robots[p] and p not in met:
                         met.add(p)
                         exceeded.append(p)
+                elif f:
                     continue
-                if p in final:
-                    continue
-                if robots[p]:
+                elif robots[p]:
                     heappush(heap, (v + k, p))
-                    continue
-                r = remaining.get(p, 0)
-                if r:  # none: a failing branch, infinite, or finalised from the start
-                    r = remaining[p] = r - m
-                    if v + k > worst[p]:
-                        worst[p] = v + k
-                    if not r:
-                        heappush(heap, (worst[p], p))
-        for x in nodes:
-            if x not in final and low[x] != INF:
+                else:
+                    wait = waiting.get(p)
+                    if wait is not None:  # none: a failing branch, infinite
+                        wait[0] -= m
+                        if v + k > wait[1]:
+                            wait[1] = v + k
+                        if not wait[0]:
+                            heappush(heap, (wait[1], p))
+        for x, f in final.items():
+            if not f and low[x] != INF:
                 low[x] = INF
                 for p, _, _ in into[x]:
-                    if (p not in nodes and low[p] != INF and not robots[p]
+                    if (p not in final and low[p] != INF and not robots[p]
                             and p not in met):
                         met.add(p)
                         exceeded.append(p)
