@@ -148,6 +148,50 @@ def test_a_human_branch_raised_above_its_bound_is_carried_up() -> None:
     assert (b.low[v], b.low[hn]) == (5, 6)
 
 
+def test_two_edges_into_one_child_count_twice() -> None:
+    """Derived by hand: a human node hn has two branches into u (cost 1 each, u robot,
+    h 1): low(hn) = 1 + 1 = 2. u's one option reaches w (cost 1, h 4): low(u) = 5, and hn,
+    both of whose branches wait on u, rises to 1 + 5 = 6 (it would stay infinite if the pass
+    counted one branch down for the two)."""
+    gr = _Graph()
+    hn = gr.add(HUMAN, 2)
+    b = _bounds(gr)
+    u = gr.add(ROBOT, 1)
+    gr.expand(hn, EXPANDED, [(1, u), (1, u)])
+    b.added()
+    b.revise([hn])
+    assert b.low[hn] == 2
+    w = gr.add(ROBOT, 4)
+    gr.expand(u, EXPANDED, [(1, w)])
+    b.added()
+    b.revise([u])
+    assert (b.low[u], b.low[hn]) == (5, 6)
+
+
+def test_a_robot_node_whose_tied_options_all_rise_is_affected() -> None:
+    """Derived by hand: a robot node p has three options of cost 1: x (h 1) and twice y
+    (h 1): low(p) = 2, tied three times. y's one option reaches q (cost 1, h 0): low(y) stays
+    1. Then x reaches a goal-to-be at cost 3 (low(x) = 3) and q one at cost 5 (low(q) = 5,
+    so low(y) = 6), in one revision: p's three tied options all rise, the two into y
+    together, and low(p) = min(1 + 3, 1 + 6) = 4."""
+    gr = _Graph()
+    p = gr.add(ROBOT, 2)
+    b = _bounds(gr)
+    x, y = gr.add(ROBOT, 1), gr.add(ROBOT, 1)
+    gr.expand(p, EXPANDED, [(1, x), (1, y), (1, y)])
+    q = gr.add(ROBOT, 0)
+    gr.expand(y, EXPANDED, [(1, q)])
+    b.added()
+    b.revise([p, y])
+    assert (b.low[p], b.low[y]) == (2, 1)
+    g1, g2 = gr.add(ROBOT, 0), gr.add(ROBOT, 0)
+    gr.expand(x, EXPANDED, [(3, g1)])
+    gr.expand(q, EXPANDED, [(5, g2)])
+    b.added()
+    b.revise([q, x])  # x's rise is met first: p still has y's two options then
+    assert (b.low[x], b.low[q], b.low[y], b.low[p]) == (3, 5, 6, 4)
+
+
 # --- the planner's own graphs ----------------------------------------------------------------
 
 

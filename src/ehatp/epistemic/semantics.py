@@ -479,7 +479,8 @@ class Semantics:
                 new = [(seen_op.apply(s), told) for s, _ in es.worlds]
             inf = self.grounded.expand(es.true ^ t2) & self.grounded.inferable_mask
             if inf:
-                new = [((s & ~inf) | (t2 & inf), a) for s, a in new]
+                keep, learnt = ~inf, t2 & inf
+                new = [((s & keep) | learnt, a) for s, a in new]
             worlds, k = normalize(new), es.k
         else:
             worlds, k = self.product(es.worlds), es.k + 1
@@ -507,14 +508,14 @@ class Semantics:
         acts: list[tuple[int, Agenda]] = []
         asks: dict[str, Formula] = {}
         finished = False
-        for u in self.H.refine_in_all(h, states):
-            if u.worlds == full:
-                if u.op != FINISH:
-                    acts.append((u.op, u.rest))
+        for op, rest, worlds, conds in self.H.refine_in_all(h, states):
+            if worlds == full:
+                if op != FINISH:
+                    acts.append((op, rest))
                 else:
                     finished = True
-            elif cop and u.conds and self.comm.ask:
-                phi = self.uncertain_part(conj(*u.conds), states)
+            elif cop and conds and self.comm.ask:
+                phi = self.uncertain_part(conj(*conds), states)
                 asks.setdefault(self.show(phi), phi)
         if self.human_model.passes == Passes.IDLE:  # the predecessor's human: only when idle
             may_pass = not acts and not asks
@@ -579,11 +580,13 @@ class Semantics:
             return Move(HUMAN, ACTION, op.name, op.cost, None, op.id,
                         failure=why + (f" ({', '.join(false)})" if false else ""))
         t2 = op.apply(t)
-        inf = self.grounded.expand(t ^ t2) & self.grounded.inferable_mask
-        new = []
-        for s, ag in es.worlds:
-            s2 = op.apply(s)
-            new.append(((s2 & ~inf) | (t2 & inf), ag))
+        grounded, apply = self.grounded, op.apply
+        inf = grounded.expand(t ^ t2) & grounded.inferable_mask
+        if inf:  # the inferable atoms the action changed take their true values
+            keep, learnt = ~inf, t2 & inf
+            new = [((apply(s) & keep) | learnt, ag) for s, ag in es.worlds]
+        else:
+            new = [(apply(s), ag) for s, ag in es.worlds]
         worlds = self.sees_done(t2, es.robot_agenda, self.assess(t2, normalize(new)))
         k = 0 if self.copresent(t2) else es.k
         return Move(HUMAN, ACTION, op.name, op.cost,

@@ -527,12 +527,15 @@ class Uncertain(tuple[int, Agenda, int, tuple[Formula, ...]]):
 
 
 def _holds(fn: object, states: tuple[int, ...], ws: int) -> int:
+    """The worlds of ``ws`` (bit i: ``states[i]``) in which ``fn`` holds."""
     out = 0
-    i = 0
-    while ws >> i:
-        if ws >> i & 1 and fn(states[i]):  # type: ignore[operator]
-            out |= 1 << i
-        i += 1
+    bit = 1
+    for s in states:
+        if bit > ws:
+            break
+        if ws & bit and fn(s):  # type: ignore[operator]
+            out |= bit
+        bit <<= 1
     return out
 
 

@@ -200,7 +200,6 @@ class _Search:
         self.bounds = (Bounds(self.graph, self.hfn, budget.check)
                        if focus and self.hfn is not None else None)
         self.unfocus = False
-        self._scratch: list[Entry] = []  # what _expand queues, unused by the focused search
 
     def _opening(self, grounded: Grounded) -> EState:
         """Return the root's state: the initial state after the problem's opening moves
@@ -342,8 +341,7 @@ class _Search:
         depth cut, which sends the work back to the search by ``f``."""
         if self._limit_reached():
             return True
-        _expand(self.graph, n, self._scratch, self.stats, self.max_depth, None, self.max_states)
-        self._scratch.clear()
+        _expand(self.graph, n, None, self.stats, self.max_depth, None, self.max_states)
         if self.graph.depth_cut:
             self.unfocus = True
             return True
@@ -420,12 +418,13 @@ class _Search:
             self.values = compute_values(gr, root, budget=self.budget, live=live)
 
 
-def _expand(gr: Graph, n: int, heap: list[Entry], stats: Stats, max_depth: int,
+def _expand(gr: Graph, n: int, heap: list[Entry] | None, stats: Stats, max_depth: int,
             hfn: Heuristic | None = None, max_states: int | None = None) -> None:
     """Expand node ``n``: a goal, a dead end, or its moves as edges (new children queued by
-    ``f``). Before adding a distinct state past ``max_states`` it stops and leaves ``n``
-    unexpanded (``OPEN``): the search then ends with at most that many, whatever order it
-    expands in."""
+    ``f`` on ``heap``; the focused search, which finds them by its walks, has none). Before
+    adding a distinct state past ``max_states`` it stops and leaves ``n`` unexpanded
+    (``OPEN``): the search then ends with at most that many, whatever order it expands
+    in."""
     sem = gr.sem
     es = gr.states[n]
     stats.expanded += 1
@@ -471,14 +470,16 @@ def _expand(gr: Graph, n: int, heap: list[Entry], stats: Stats, max_depth: int,
                 stats.distinct += 1
                 if len(child.worlds) > stats.max_worlds:
                     stats.max_worlds = len(child.worlds)
-                heappush(heap, (g1 if hfn is None else g1 + hfn(child), g1, c))
+                if heap is not None:
+                    heappush(heap, (g1 if hfn is None else g1 + hfn(child), g1, c))
                 edges.append(Edge(gr.descriptor(move, c), c, pid))
                 continue
             move = gr.descriptor(move, c)
         # else: a child read off another node's edge, the same node with the same move
         if g1 < gs[c] and status[c] == OPEN:
             gs[c] = g1
-            heappush(heap, (g1 if hfn is None else g1 + hfn(states[c]), g1, c))
+            if heap is not None:
+                heappush(heap, (g1 if hfn is None else g1 + hfn(states[c]), g1, c))
         if d0 < depth[c]:
             _lower_depth(gr, c, d0, heap, max_depth, hfn)
         gr.add_parent(c, n)
@@ -532,11 +533,13 @@ def _reused(gr: Graph, twin: int, p: int) -> list[tuple[Move, EState | None, int
     return out
 
 
-def _lower_depth(gr: Graph, c: int, d: int, heap: list[Entry], max_depth: int,
+def _lower_depth(gr: Graph, c: int, d: int, heap: list[Entry] | None, max_depth: int,
                  hfn: Heuristic | None) -> None:
     """§6: a shorter path to ``c`` was found: its depth (the least number of moves from the
     root over the paths found) becomes ``d``, and so on down the expanded nodes below it; a
-    node the depth limit had cut that is now above the limit is open again::
+    node the depth limit had cut that is now above the limit is open again (the focused
+    search, without ``heap``, has no such node: its first cut hands the work to the search
+    by ``f``)::
 
         stack = [(c, d)]
         while stack: (x, d) = pop
@@ -557,7 +560,9 @@ def _lower_depth(gr: Graph, c: int, d: int, heap: list[Entry], max_depth: int,
                 gr.status[x] = OPEN
                 del gr.dead_why[x]
                 gx = gr.g[x]
-                heapq.heappush(heap, (gx if hfn is None else gx + hfn(gr.states[x]), gx, x))
+                if heap is not None:
+                    heapq.heappush(heap, (gx if hfn is None else gx + hfn(gr.states[x]), gx,
+                                          x))
         elif gr.status[x] == EXPANDED:
             stack.extend((e.child, dx + 1) for e in gr.edges[x] if e.child >= 0)
 

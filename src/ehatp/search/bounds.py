@@ -24,11 +24,11 @@ from ..epistemic.state import ROBOT
 from ..model.problem import Cost
 from .graph import EXPANDED, GOAL, OPEN, Graph
 from .heuristic import Bound, Heuristic
-from .values import CHECK_EVERY, equation
+from .values import CHECK_EVERY
 
 INF = float("inf")
 Kids = tuple[tuple[Cost, int], ...]  # a node's edges as (cost, child) pairs
-FEW_EDGES = 16  # a node with more edges is read through a table by child (Bounds._to)
+Into = list[tuple[int, Cost, int]]  # the edges into a node as (parent, cost, how many)
 SPREAD = 8  # a batch of expansions is at least 1/SPREAD of the last revision's work (nodes)
 
 
@@ -46,29 +46,46 @@ class Bounds:
         self.low: list[Bound] = []
         self.last_work = 0  # the nodes the last revision recomputed
         self.full_passes = 0  # revisions done by a whole pass (a bound that fell: none expected)
-        # per node, read off the graph once: whether the robot moves there, and once expanded
-        # its edges as (cost, child) pairs (a node's edges never change once it is expanded)
+        # per node, read off the graph once: whether the robot moves there, once expanded its
+        # edges as (cost, child) pairs (a node's edges never change once it is expanded), and
+        # the edges into it from the expanded nodes whose edges were read, as (parent, cost,
+        # how many edges from that parent at that cost): a rise travels up them without
+        # scanning each parent's edges for the child
         self._robot = bytearray()
         self._kids: list[Kids | None] = []
-        self._by_child: dict[int, dict[int, Kids]] = {}  # nodes past FEW_EDGES (_to)
+        self._into: list[Into] = []
         self.added()
 
     def added(self) -> None:
         """Give the nodes created since the last call their ``h`` as bound."""
         low, states, hfn = self.low, self.gr.states, self.hfn
-        robot, kids = self._robot, self._kids
+        robot, kids, into = self._robot, self._kids, self._into
         for n in range(len(low), len(states)):
             es = states[n]
             low.append(hfn(es))
             robot.append(es.turn == ROBOT)
             kids.append(None)
+            into.append([])
 
     def _kids_of(self, n: int) -> Kids:
         """Return the edges of the expanded (or goal, or dead) node ``n`` as (cost, child)
-        pairs, in the graph's order (child -1: a failing move)."""
+        pairs, in the graph's order (child -1: a failing move); the first time, also record
+        them as edges into the children."""
         k = self._kids[n]
         if k is None:
             k = self._kids[n] = tuple([(e.move.cost, e.child) for e in self.gr.edges[n]])
+            into = self._into
+            if len({c for _, c in k}) == len(k):  # one edge per child, as nearly always
+                for cost, c in k:
+                    if c >= 0:
+                        into[c].append((n, cost, 1))
+            else:
+                many: dict[tuple[Cost, int], int] = {}
+                for pair in k:
+                    if pair[1] >= 0:
+                        many[pair] = many.get(pair, 0) + 1
+                for (cost, c), m in many.items():
+                    into[c].append((n, cost, m))
         return k
 
     def walk(self, root: int) -> list[int]:
@@ -121,10 +138,30 @@ class Bounds:
 
     def _eval(self, n: int) -> Bound:
         """Return ``n``'s bound from its children's current bounds (its own ``h`` while
-        open)."""
-        if self.gr.status[n] == OPEN:
+        open): §7's equation, as :func:`~.values.equation` has it, read off its (cost,
+        child) pairs."""
+        s = self.gr.status[n]
+        if s == OPEN:
             return self.low[n]
-        return equation(self.gr, n, self.low)  # a dead end has no edge: infinite
+        if s == GOAL:
+            return 0
+        low = self.low
+        kids = self._kids[n] or self._kids_of(n)
+        if self._robot[n]:  # the least option (a dead end has none: infinite)
+            best: Bound = INF
+            for k, c in kids:
+                if c >= 0 and k + low[c] < best:
+                    best = k + low[c]
+            return best
+        if not kids:
+            return INF
+        worst: Bound = 0
+        for k, c in kids:
+            if c < 0:
+                return INF  # a failing branch
+            if k + low[c] > worst:
+                worst = k + low[c]
+        return worst
 
     def revise(self, expanded: list[int]) -> None:
         """The nodes ``expanded`` were just expanded (or became goals or dead ends): bring
@@ -158,33 +195,14 @@ class Bounds:
         self.last_work = 0
         while raised:
             affected = self._affected(raised)
-            before = {x: low[x] for x in affected}
             self.last_work += len(affected)
-            self._pass(affected)
-            raised = self._exceeded(affected, before)
-
-    def _to(self, p: int, x: int) -> Kids:
-        """Return (cost, child) pairs of ``p`` among which are all its edges to ``x``: all of
-        them, or past :data:`FEW_EDGES` only those to ``x``, from a table of ``p``'s edges by
-        child made once (a node with thousands of children, each revised, would otherwise be
-        scanned once per child: IPC Woodworking's root has 14,581)."""
-        kids = self._kids[p] or self._kids_of(p)
-        if len(kids) <= FEW_EDGES:
-            return kids
-        by_child = self._by_child.get(p)
-        if by_child is None:
-            table: dict[int, list[tuple[Cost, int]]] = {}
-            for pair in kids:
-                table.setdefault(pair[1], []).append(pair)
-            by_child = self._by_child[p] = {c: tuple(v) for c, v in table.items()}
-        return by_child.get(x, ())
+            raised = self._pass(affected)
 
     def _affected(self, raised: list[int]) -> set[int]:
         """Return ``raised`` and the nodes above whose bound only they give (:meth:`revise`):
         a human node one of whose greatest branches is affected, a robot node all of whose
         least options are."""
-        gr, low, robots, kids_, to = self.gr, self.low, self._robot, self._kids, self._to
-        status, parents = gr.status, gr.parents
+        low, robots, kids_, into = self.low, self._robot, self._kids, self._into
         affected = set(raised)
         support: dict[int, int] = {}  # robot nodes: their least options not affected yet
         stack = list(raised)
@@ -195,26 +213,17 @@ class Bounds:
                 check()
             x = stack.pop()
             lx = low[x]
-            ps = parents(x)
-            for p in (set(ps) if len(ps) > 1 else ps):
-                if p in affected or status[p] != EXPANDED:
-                    continue
+            # at most one entry per parent gives: its edges to x at one cost
+            for p, k, gives in into[x]:
                 lp = low[p]
-                if lp == INF:
-                    continue  # a rise cannot change it
-                gives = 0
-                kids = kids_[p] or self._kids_of(p)
-                for k, c in (kids if len(kids) <= FEW_EDGES else to(p, x)):
-                    if c == x and k + lx == lp:
-                        gives += 1
-                if not gives:
-                    continue
+                if k + lx != lp or lp == INF or p in affected:
+                    continue  # an infinite bound: a rise cannot change it
                 if robots[p]:
                     left = support.get(p)
                     if left is None:
                         left = 0
-                        for k, c in kids:
-                            if c >= 0 and c not in affected and k + low[c] == lp:
+                        for k2, c in kids_[p] or self._kids_of(p):
+                            if c >= 0 and k2 + low[c] == lp and c not in affected:
                                 left += 1
                     else:
                         left -= gives
@@ -225,38 +234,17 @@ class Bounds:
                 stack.append(p)
         return affected
 
-    def _exceeded(self, affected: set[int], before: dict[int, Bound]) -> list[int]:
-        """Return the human nodes outside ``affected`` whose bound a risen child of
-        ``affected`` now exceeds."""
-        gr, low, robots, to = self.gr, self.low, self._robot, self._to
-        status = gr.status
-        out: list[int] = []
-        met: set[int] = set()
-        for x, was in before.items():
-            lx = low[x]
-            if lx == was:
-                continue
-            for p in gr.parents(x):
-                if (p in affected or p in met or status[p] != EXPANDED
-                        or robots[p] or low[p] == INF):
-                    continue
-                lp = low[p]
-                for k, c in to(p, x):
-                    if c == x and k + lx > lp:
-                        met.add(p)
-                        out.append(p)
-                        break
-        return out
-
-    def _pass(self, nodes: set[int]) -> None:
+    def _pass(self, nodes: set[int]) -> list[int]:
         """Knuth's pass (:func:`~.values.knuth`) over ``nodes``, the bounds of the other nodes
         fixed: each of ``nodes`` gets the least fixpoint of its equation, infinite where the
-        pass never finalises it."""
-        gr, low, robots, kids_, to = self.gr, self.low, self._robot, self._kids, self._to
-        status, parents = gr.status, gr.parents
+        pass never finalises it. Return the human nodes outside ``nodes`` whose bound a node
+        of ``nodes`` that rose now exceeds (found on the way up from it)."""
+        gr, low, robots, kids_, into = self.gr, self.low, self._robot, self._kids, self._into
+        status = gr.status
         heap: list[tuple[Bound, int]] = []
-        remaining: dict[int, int] = {}
-        worst: dict[int, Bound] = {}
+        # human nodes: [their children in nodes not finalised yet, their greatest branch so
+        # far]
+        waiting: dict[int, list[Bound]] = {}
         for x in nodes:
             s = status[x]
             if s == GOAL:
@@ -273,57 +261,77 @@ class Bounds:
                 if best < INF:
                     heap.append((best, x))
                 continue
-            if not kids or any(c < 0 for _, c in kids):
-                continue
             r = 0
             w: Bound = 0
             for k, c in kids:
+                if c < 0:  # a failing branch: infinite
+                    break
                 if c in nodes:
                     r += 1
                 elif k + low[c] > w:
                     w = k + low[c]
-            remaining[x], worst[x] = r, w
-            if r == 0:
-                heap.append((w, x))
+            else:
+                if not kids:  # no branch: infinite
+                    continue
+                if r:
+                    waiting[x] = [r, w]
+                else:
+                    heap.append((w, x))
         heapq.heapify(heap)
-        final: set[int] = set()
+        final = dict.fromkeys(nodes, False)  # whether each of nodes is finalised
+        done = 0
+        exceeded: list[int] = []
+        met: set[int] = set()
         check = self.check
         heappush, heappop = heapq.heappush, heapq.heappop
         while heap:
             v, x = heappop(heap)
-            if x in final:
+            if final[x]:
                 continue
-            final.add(x)
-            if not len(final) & CHECK_EVERY:
+            final[x] = True
+            done += 1
+            if not done & CHECK_EVERY:
                 check()
+            rose = low[x] != v
             low[x] = v
-            ps = parents(x)
-            for p in (set(ps) if len(ps) > 1 else ps):
-                if p not in nodes or p in final:
+            for p, k, m in into[x]:
+                f = final.get(p)
+                if f is None:
+                    # a human node left out whose bound x, risen, now exceeds (never one of
+                    # infinite bound)
+                    if rose and v + k > low[p] and not robots[p] and p not in met:
+                        met.add(p)
+                        exceeded.append(p)
+                elif f:
                     continue
-                robot = robots[p]
-                kids = kids_[p] or self._kids_of(p)
-                for k, c in (kids if len(kids) <= FEW_EDGES else to(p, x)):
-                    if c != x:
-                        continue
-                    cand = v + k
-                    if robot:
-                        heappush(heap, (cand, p))
-                    elif remaining.get(p, 0) > 0:  # none: a failing branch, infinite
-                        remaining[p] -= 1
-                        if cand > worst[p]:
-                            worst[p] = cand
-                        if remaining[p] == 0:
-                            heappush(heap, (worst[p], p))
-        for x in nodes:
-            if x not in final:
+                elif robots[p]:
+                    heappush(heap, (v + k, p))
+                else:
+                    wait = waiting.get(p)
+                    if wait is not None:  # none: a failing branch, infinite
+                        wait[0] -= m
+                        if v + k > wait[1]:
+                            wait[1] = v + k
+                        if not wait[0]:
+                            heappush(heap, (wait[1], p))
+        for x, f in final.items():
+            if not f and low[x] != INF:
                 low[x] = INF
+                for p, _, _ in into[x]:
+                    if (p not in final and low[p] != INF and not robots[p]
+                            and p not in met):
+                        met.add(p)
+                        exceeded.append(p)
+        return exceeded
 
     def _whole_pass(self) -> None:
         """Recompute every expanded node's bound by a pass over the whole graph."""
         self.full_passes += 1
         status = self.gr.status
-        self._pass({n for n in range(len(self.low)) if status[n] != OPEN})
+        done = {n for n in range(len(self.low)) if status[n] != OPEN}
+        for n in done:
+            self._kids_of(n)  # every edge into a node recorded
+        self._pass(done)
 
 
 def _never() -> None:
