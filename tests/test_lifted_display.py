@@ -39,7 +39,8 @@ def invoke(*args: str | Path) -> tuple[int, str]:
 @pytest.fixture(scope="module")
 def c8(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Policy]:
     """8 cubes / 2 boxes / K=2 with symmetry: 131 canonical nodes standing for 817 real
-    ones and 2,304 branches (the figures the first test checks)."""
+    ones and 2,304 branches (the figures the first test checks); the problem file beside it
+    as ``c8.toml``."""
     d = tmp_path_factory.mktemp("c8")
     problem = d / "c8.toml"
     problem.write_text(bench.select_points(None, ["cubes-c8-b2-opaque-k2"], False)[0].toml(),
@@ -200,3 +201,20 @@ def test_a_policy_within_the_limit_is_shown_and_drawn_as_before(
     assert invoke("show", path)[1] == invoke("show", path, "--expand-limit", 0)[1]
     assert invoke("render", path)[1] == invoke("render", path, "--expand-limit", 0)[1]
     assert pol.symmetry is not None  # lifted, and within the default limit (817 real nodes)
+
+
+def test_expand_stops_at_its_limit_writing_nothing_and_without_one_writes_the_graph(
+        c8: tuple[Path, Policy], tmp_path: Path) -> None:
+    path, _ = c8
+    problem, out = path.with_name("c8.toml"), tmp_path / "c8-real.json"
+    r = runner.invoke(app, ["expand", str(path), "--problem", str(problem), "--out", str(out),
+                            "--expand-limit", "100"])
+    assert r.exit_code == 1 and not out.exists()
+    assert r.stderr.strip() == (f"expand: {path}: stopped, the lifted policy (131 canonical "
+                                "nodes) stands for more than 100 nodes over the real objects "
+                                "(--expand-limit 100); nothing written")
+    r = runner.invoke(app, ["expand", str(path), "--problem", str(problem), "--out", str(out)])
+    # played by the problem's semantics, a real node is a real epistemic state: 562 of them,
+    # as many as the policy of the search without symmetry has (the text-only expansion keeps
+    # two canonical nodes apart even where they map to one real state: 817)
+    assert r.exit_code == 0 and len(Policy.load(out).nodes) == 562
