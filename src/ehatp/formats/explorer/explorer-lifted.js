@@ -32,7 +32,9 @@
   const SYM = policy.symmetry;
   const OBJECTS = SYM.objects;
   const TABLE = SYM.renamings;
-  // an object name in a label or a fact: lifted.TOKEN (the planner's tokenisation)
+  // an object name in a label or a fact: lifted.TOKEN (the planner's tokenisation); JS and
+  // Python agree on \s for every character an object name or a separator can hold (ASCII
+  // spaces; a policy file holds no control character)
   const TOKEN = /[^\s(),=\[\]<>!|{}+;:]+/g;
   const CACHE = 4096; // views kept (a walk revisits the same few)
   const inverse = (p) => {
