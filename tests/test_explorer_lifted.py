@@ -21,7 +21,12 @@ from ehatp.formats.lifted import Renamings, expanded
 from ehatp.formats.policy import COMM_KINDS, PathStep, Policy, PolicyMove, PolicyNode, timeline
 from ehatp.formats.render import Explorer, _asset, notebook_html, to_html
 
-from .test_render import browser, embedded, open_page  # noqa: F401  (browser is a fixture)
+from .test_render import (  # noqa: F401  (browser is a fixture)
+    SMALLEST_TEXT,
+    browser,
+    embedded,
+    open_page,
+)
 
 CUBES = examples_dir() / "cubes"
 Path_ = tuple[int, ...]  # a path of move indices from the root
@@ -65,7 +70,8 @@ def lifted_twins() -> Policy:
     also the root's (``symmetry.root = 1``), so the real root is canonical node 0 with the
     boxes swapped. Canonical node 0 offers ``pick(w)`` to node 1 twice (the second through
     renaming 1) and ``pass`` to node 2, which offers ``wave`` to node 3 twice (the second
-    through renaming 1); node 3's human agenda names box1."""
+    through renaming 1); node 3's human agenda names box1, the first of two hypotheses
+    (the robot cannot tell ``fill(box1)`` from ``idle``)."""
     nodes = [
         _node(0, ["at(w, ot)", "empty(box1)"],
               [_h("pick(w)", 1), _h("pick(w)", 1, 1), _h("pass", 2)], 2),
@@ -73,6 +79,7 @@ def lifted_twins() -> Policy:
         _node(2, ["at(w, ot)"], [_h("wave", 3), _h("wave", 3, 1)], 1),
         _node(3, ["at(w, ot)"], [], 0, human=["fill(box1)"]),
     ]
+    nodes[3].hypotheses = [["fill(box1)"], ["idle"]]
     return Policy("twins", "synthetic", {"robot": "R", "human": "H"}, 2,
                   {"inform": 1, "ask": 1, "wait": 1, "pass": 1, "actions": {}}, nodes, 2, 0, 4,
                   worst_case=2,
@@ -84,8 +91,8 @@ def test_the_lifted_twins_expand_as_derived_by_hand() -> None:
     """By hand: the root's renaming is the swap (the inverse of renamings[1]), so the real
     root holds ``empty(box2)``; the first ``pick(w)`` keeps the swap (``in(r, box2)``), the
     second composes it with the inverse of the swap, the identity (``in(r, box1)``); after
-    ``pass`` the first ``wave`` leads to ``fill(box2)``, the second to ``fill(box1)``: six
-    real nodes. (The page test below leans on this.)"""
+    ``pass`` the first ``wave`` leads to the hypotheses ``fill(box2)`` / ``idle``, the second
+    to ``fill(box1)`` / ``idle``: six real nodes. (The page test below leans on this.)"""
     e = expanded(lifted_twins())
     root = e.nodes[0]
     assert root.state == ["at(w, ot)", "empty(box2)"]
@@ -93,6 +100,8 @@ def test_the_lifted_twins_expand_as_derived_by_hand() -> None:
         ["holding(H, w)", "in(r, box2)"], ["holding(H, w)", "in(r, box1)"]]
     after = e.nodes[root.moves[2].to]
     assert [e.nodes[m.to].human_agenda for m in after.moves] == [["fill(box2)"], ["fill(box1)"]]
+    assert [e.nodes[m.to].hypotheses for m in after.moves] == [
+        [["fill(box2)"], ["idle"]], [["fill(box1)"], ["idle"]]]
     assert len(e.nodes) == 6 and e.leaves == 4
 
 
@@ -389,7 +398,7 @@ def walk_and_compare(browser: Any, tmp_path: Path, policy: Policy,  # noqa: F811
 
 
 @pytest.mark.slow  # a real Chromium
-@pytest.mark.parametrize("name", ["p2", "p4"])
+@pytest.mark.parametrize("name", ["p2", "p4", "x2-4cubes-k4"])
 def test_unfolding_a_lifted_example_shows_its_expansion_node_by_node(
         name: str, tmp_path: Path, browser: Any) -> None:  # noqa: F811
     """Every item of the tree (every branch to its leaf), reached by unfolding."""
@@ -420,12 +429,12 @@ def test_moves_that_read_the_same_are_told_apart_through_renamings(
     """The lifted twins: the two ``pick(w)`` read the same and are told apart by the boxes
     their renamings give (derived by hand in test_the_lifted_twins_expand_as_derived_by_hand:
     the first leads to ``in(r, box2)``, the second to ``in(r, box1)``), the two ``wave`` by
-    the human's agendas ``fill(box2)`` / ``fill(box1)``."""
+    the human's agendas ``fill(box2) | idle`` / ``fill(box1) | idle``."""
     policy = lifted_twins()
     assert walk_and_compare(browser, tmp_path, policy, tree_paths(expanded(policy))) > 0
     assert reach(browser, (0,))["differs"].endswith("this one: in(r, box2), not in(r, box1)")
     assert reach(browser, (1,))["label"] == "H: pick(w) (2/2)"
-    assert reach(browser, (2, 1))["differs"].endswith("this one: human: fill(box1)")
+    assert reach(browser, (2, 1))["differs"].endswith("this one: human: fill(box1) | idle")
 
 
 @pytest.mark.slow  # a real Chromium
@@ -461,6 +470,13 @@ def test_the_k8_page_of_20_cubes_opens_and_unfolds(tmp_path: Path,
     out = tmp_path / "k8.html"
     out.write_text(page, encoding="utf-8")
     open_page(browser, out)  # waits for the page to be drawn (at most 20 s)
+    # it opens readable, the root in view (as an eager page does: tests/test_render.py)
+    least, shown = browser.execute_script(SMALLEST_TEXT)
+    assert shown > 0 and least >= 10, (least, shown)
+    assert browser.execute_script(
+        "const r = document.querySelector('[data-path=\"\"]').getBoundingClientRect(), "
+        "p = document.getElementById('tree').getBoundingClientRect(); return r.top >= p.top "
+        "&& r.bottom <= p.bottom && r.left >= p.left && r.right <= p.right;")
     facts = browser.find_element(By.ID, "policy-facts").text
     assert facts.startswith(f"{policy.leaves} branches · "
                             f"{plural(policy.communications, 'communication')} · K = 8 · ")
