@@ -435,6 +435,11 @@ def test_moves_that_read_the_same_are_told_apart_through_renamings(
     assert reach(browser, (0,))["differs"].endswith("this one: in(r, box2), not in(r, box1)")
     assert reach(browser, (1,))["label"] == "H: pick(w) (2/2)"
     assert reach(browser, (2, 1))["differs"].endswith("this one: human: fill(box1) | idle")
+    from selenium.webdriver.common.by import By
+
+    assert [o.text for o in browser.find_elements(By.CSS_SELECTOR, "#branch-select option")] == [
+        "branch 1: H: pick(w) (1/2) (leaf c1)", "branch 2: H: pick(w) (2/2) (leaf c1)",
+        "branch 3: H: wave (1/2) (leaf c3)", "branch 4: H: wave (2/2) (leaf c3)"]
 
 
 @pytest.mark.slow  # a real Chromium
@@ -509,3 +514,71 @@ def test_the_k8_page_of_20_cubes_opens_and_unfolds(tmp_path: Path,
                                     ", ".join(view.human_agenda) or "—"]
         assert shown["rows"] == view.worlds + 2
     assert max(s.node.worlds for s in branch[:18]) > 5000
+
+
+def first_paths(policy: Policy) -> dict[int, Path_]:
+    """The first path (depth-first, moves in order) to each canonical node."""
+    out: dict[int, Path_] = {}
+    stack: list[tuple[int, Path_]] = [(0, ())]
+    while stack:
+        n, path = stack.pop()
+        if n in out:
+            continue
+        out[n] = path
+        moves = policy.nodes[n].moves
+        stack.extend((moves[j].to, (*path, j)) for j in reversed(range(len(moves))))
+    return out
+
+
+@pytest.mark.slow  # a real Chromium
+def test_expand_all_stops_at_its_budget_and_the_lists_lead_to_real_moves(
+        tmp_path: Path, browser: Any) -> None:  # noqa: F811
+    """8 cubes / 3 boxes / K=8 (25,091 items in its tree unfolding): "expand all" draws at
+    most 3,000 boxes and says so. P4: each communication of the canonical graph is listed
+    once, as the expansion has it at the first path to its node, and leads there; the branch
+    list gives every branch, depth-first, with the move into its leaf, and leads to it."""
+    from selenium.webdriver.common.by import By
+
+    policy = bench_policy(tmp_path, "cubes-c8-b3-opaque-k8")
+    e = expanded(policy)
+    page = tmp_path / "c8.html"
+    page.write_text(to_html(policy), encoding="utf-8")
+    open_page(browser, page)
+    assert browser.find_element(By.ID, "node-count").text.endswith(
+        f" of {policy.tree_size():,} tree items shown")
+    browser.find_element(By.ID, "expand-all").click()
+    drawn = len(browser.find_elements(By.CSS_SELECTOR, "#nodes g.node"))
+    assert 2000 < drawn <= 3000
+    assert "expand all stops at 3,000" in browser.find_element(By.ID, "node-count").text
+    browser.find_element(By.ID, "collapse-all").click()
+    assert len(browser.find_elements(By.CSS_SELECTOR, "#nodes g.node")) <= 1 + len(
+        policy.nodes[0].moves)
+    # P4: two communications and several leaves
+    policy = example_policy("p4")
+    e = expanded(policy)
+    page = tmp_path / "p4.html"
+    page.write_text(to_html(policy), encoding="utf-8")
+    open_page(browser, page)
+    paths = first_paths(policy)
+    comms = [(*paths[i], j) for i, n in enumerate(policy.nodes)
+             for j, m in enumerate(n.moves) if m.kind in COMM_KINDS]
+    assert comms
+    buttons = browser.find_elements(By.CSS_SELECTOR, "#comm-list [data-goto]")
+    assert [b.get_attribute("data-goto") for b in buttons] == [dotted(p) for p in comms]
+    for path, b in zip(comms, buttons, strict=True):
+        assert b.text.endswith(expected(e, path)["label"])
+    for path in comms:
+        browser.execute_script(CLICK, f'#comm-list [data-goto="{dotted(path)}"]')
+        assert browser.execute_script(READ) == expected(e, path)
+    leaves = [p for p in tree_paths(e) if not e.nodes[real_node(e, p)].moves]
+    assert len(leaves) == e.leaves > 1
+    options = browser.find_elements(By.CSS_SELECTOR, "#branch-select option")
+    assert [o.get_attribute("value") for o in options] == [dotted(p) for p in leaves]
+    for k, (path, o) in enumerate(zip(leaves, options, strict=True)):
+        assert o.text.startswith(f"branch {k + 1}: {expected(e, path)['label']} (leaf c")
+    from selenium.webdriver.support.ui import Select
+
+    Select(browser.find_element(By.ID, "branch-select")).select_by_value(dotted(leaves[-1]))
+    assert browser.execute_script(READ) == expected(e, leaves[-1])
+    errors = [x for x in browser.get_log("browser") if x["level"] == "SEVERE"]
+    assert errors == []

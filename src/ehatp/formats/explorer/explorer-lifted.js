@@ -648,7 +648,7 @@
     }
     if (path.length === 1) box.appendChild(h("div", { class: "tl-end" }, "the initial state is the goal"));
     else if (leaf.goal) box.appendChild(h("div", { class: "tl-end" }, `goal reached (branch cost ${cost})`));
-    // the drop-down lists each canonical leaf at its first path; another path shows no option
+    // the drop-down lists the first MAX_OPTIONS branches; a later one shows no option
     const end = items[path[path.length - 1]].path;
     $("branch-select").value = leafOptions.has(end) ? end : "";
     $("timeline-note").textContent = upto < path.length - 1
@@ -804,15 +804,29 @@
     });
   });
   if (!comms) list.textContent = "none";
-  // the canonical leaves, in id order, each at its first path
+  // the first branches of the tree unfolding, depth-first (the order of Policy.iter_branches
+  // and of `ehatp show`'s timelines): a leaf's move renamed through its parent's renaming, made
+  // into items only where sibling moves read the same (for their numbers)
   const select_ = $("branch-select");
   const MAX_OPTIONS = 2000;
   const leafOptions = new Set();
-  for (const n of nodes) {
-    if (n.moves.length || leafOptions.size >= MAX_OPTIONS) continue;
-    const it = itemAt(firstPath[n.id]);
-    select_.appendChild(h("option", { value: items[it].path }, `leaf c${n.id}: ${label(it)}`));
-    leafOptions.add(items[it].path);
+  for (const stack = [[0, ROOT_TAU, "", -1, -1, null]]; stack.length && leafOptions.size < MAX_OPTIONS;) {
+    const [n, tau, path, up, j, upTau] = stack.pop();
+    const moves = nodes[n].moves;
+    for (let k = moves.length - 1; k >= 0; k--) {
+      stack.push([moves[k].to, childTau(tau, moves[k].renaming || 0),
+        path === "" ? String(k) : `${path}.${k}`, n, k, tau]);
+    }
+    if (moves.length) continue;
+    let text = "start";
+    if (up >= 0) {
+      const m = nodes[up].moves[j];
+      const twins = nodes[up].moves.filter((x) => x.agent === m.agent && x.action === m.action);
+      text = twins.length > 1 ? label(itemAt(path))
+        : `${m.agent}: ${renamed(names(upTau, upTau.join(",")), m.action)}`;
+    }
+    leafOptions.add(path);
+    select_.appendChild(h("option", { value: path }, `branch ${leafOptions.size}: ${text} (leaf c${n})`));
   }
 
   // a lifted page says how to read it (the template's hint and legend speak of references)
