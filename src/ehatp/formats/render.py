@@ -429,9 +429,11 @@ def to_html(policy: Policy, *, max_depth: int | None = None,
             max_nodes: int | None = DEFAULT_MAX_NODES, static: list[str] | None = None) -> str:
     """Return the self-contained explorer page; depth cap and budget only set what starts
     folded; ``static`` (:func:`static_facts`) are listed with the truth of every node, marked
-    static. A lifted policy (format version 3) is drawn expanded
-    (:func:`~ehatp.formats.lifted.expanded`)."""
-    policy = expanded(policy)
+    static. A lifted policy (format version 3) is embedded as it is and realised in the page,
+    a branch when it is unfolded (``explorer/explorer-lifted.js``, docs/rendering.md): the page
+    grows with the lifted file, never with its expansion; a version 2 policy is drawn by
+    ``explorer/explorer.js`` as before."""
+    lifted = policy.symmetry is not None
     data = policy.to_dict()
     config = {"maxDepth": max_depth, "maxNodes": max_nodes, "staticFacts": static or []}
     parts = {
@@ -439,7 +441,7 @@ def to_html(policy: Policy, *, max_depth: int | None = None,
         "title": html_escape(f"{policy.problem} — ehatp policy").replace(":", "&#58;")
         .replace("/", "&#47;").replace("\u2028", "&#8232;").replace("\u2029", "&#8233;"),
         "css": _asset("explorer.css"),
-        "js": _asset("explorer.js"),
+        "js": _asset("explorer-lifted.js" if lifted else "explorer.js"),
         "policy_json": _script_json(data),
         "config_json": _script_json(config),
     }
