@@ -113,7 +113,7 @@ def test_a_lifted_page_embeds_the_lifted_policy_not_its_expansion(tmp_path: Path
     policy data is the lifted file's JSON) and is the size of the lifted file plus the page's
     own code; the page of its expansion (thousands of real nodes) is many times larger."""
     policy = bench_policy(tmp_path, "cubes-c12-b2-opaque-k2")
-    page = to_html(policy)
+    page = to_html(policy, expand_limit=0)
     assert embedded(page, "policy-data") == json.loads(json.dumps(policy.to_dict()))
     assert _asset("explorer-lifted.js") in page and _asset("explorer.js") not in page
     own = sum(len(_asset(a)) for a in ("explorer.html", "explorer.css", "explorer-lifted.js"))
@@ -134,18 +134,20 @@ def test_a_version_2_page_is_the_eager_explorer_as_before() -> None:
     assert embedded(page, "policy-data") == json.loads(json.dumps(e.to_dict()))
 
 
-def test_the_notebook_shows_the_lazy_page_of_a_lifted_policy() -> None:
+def test_the_notebook_shows_the_lazy_page_of_a_lifted_policy_past_the_limit() -> None:
     policy = example_policy("p2")
-    html = notebook_html(policy)
-    assert html_escape(to_html(policy), quote=True) in html
+    html = notebook_html(policy, expand_limit=0)
+    assert html_escape(to_html(policy, expand_limit=0), quote=True) in html
     assert html_escape(_asset("explorer-lifted.js"), quote=True) in html
-    assert Explorer(policy)._repr_html_() == html
+    # within the limit (26 real nodes), the page of the expansion, as `ehatp render` draws it
+    assert Explorer(policy)._repr_html_() == notebook_html(policy) == notebook_html(
+        expanded(policy))
 
 
 def test_a_lifted_page_survives_hostile_strings() -> None:
     policy = lifted_twins()
     policy.problem = "</script><script>alert(1)</script> see https://example.org/x.js"
-    page = to_html(policy)
+    page = to_html(policy, expand_limit=0)
     assert page.count("</script>") == 3  # policy data, config, code
     assert "https:" not in page
     assert embedded(page, "policy-data")["problem"] == policy.problem
@@ -365,7 +367,7 @@ def walk_and_compare(browser: Any, tmp_path: Path, policy: Policy,  # noqa: F811
     a renaming other than the identity (so that the walk tested some renaming)."""
     e = expanded(policy)
     lazy, eager = tmp_path / "lazy.html", tmp_path / "eager.html"
-    lazy.write_text(to_html(policy), encoding="utf-8")
+    lazy.write_text(to_html(policy, expand_limit=0), encoding="utf-8")
     eager.write_text(to_html(e), encoding="utf-8")
     open_page(browser, eager)
     shown_eager: dict[int, dict[str, Any]] = {}
@@ -449,7 +451,7 @@ def test_a_link_to_a_path_selects_that_branch_on_load(tmp_path: Path,
     e = expanded(policy)
     path = tree_paths(e)[-1]  # the last item depth-first: a leaf of the last branch
     page = tmp_path / "p4.html"
-    page.write_text(to_html(policy), encoding="utf-8")
+    page.write_text(to_html(policy, expand_limit=0), encoding="utf-8")
     browser.get(page.as_uri() + f"#path={dotted(path)}")
     from selenium.webdriver.support.ui import WebDriverWait
 
@@ -469,7 +471,7 @@ def test_the_k8_page_of_20_cubes_opens_and_unfolds(tmp_path: Path,
     from selenium.webdriver.common.by import By
 
     policy = bench_policy(tmp_path, "cubes-c20-b3-opaque-k8")
-    page = to_html(policy)
+    page = to_html(policy, expand_limit=0)
     lifted = len(json.dumps(policy.to_dict(), ensure_ascii=False, separators=(",", ":")))
     assert len(page) < 1.05 * lifted + 200_000
     out = tmp_path / "k8.html"
@@ -542,7 +544,7 @@ def test_expand_all_stops_at_its_budget_and_the_lists_lead_to_real_moves(
     policy = bench_policy(tmp_path, "cubes-c8-b3-opaque-k8")
     e = expanded(policy)
     page = tmp_path / "c8.html"
-    page.write_text(to_html(policy), encoding="utf-8")
+    page.write_text(to_html(policy, expand_limit=0), encoding="utf-8")
     open_page(browser, page)
     assert browser.find_element(By.ID, "node-count").text.endswith(
         f" of {policy.tree_size():,} tree items shown")
@@ -557,7 +559,7 @@ def test_expand_all_stops_at_its_budget_and_the_lists_lead_to_real_moves(
     policy = example_policy("p4")
     e = expanded(policy)
     page = tmp_path / "p4.html"
-    page.write_text(to_html(policy), encoding="utf-8")
+    page.write_text(to_html(policy, expand_limit=0), encoding="utf-8")
     open_page(browser, page)
     paths = first_paths(policy)
     comms = [(*paths[i], j) for i, n in enumerate(policy.nodes)

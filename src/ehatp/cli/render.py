@@ -78,7 +78,7 @@ def render_command(
     if notes and out is None:
         typer.echo(printable(f"render: {policy}: collapsed: {'; '.join(notes)}"), err=True)
     kind = {Format.dot: "Graphviz DOT", Format.svg: "SVG", Format.html: "HTML explorer"}[fmt]
-    try:
+    try:  # what was drawn: the expansion (done once more, within the limit), or the lifted
         size = f"{len(expanded(pol, expand_limit(limit)).nodes):,} policy nodes"
     except PolicyTooLarge:
         size = f"lifted, {len(pol.nodes):,} canonical nodes"

@@ -18,6 +18,7 @@ made, the command line never (it is :mod:`ehatp.cli.render`).
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import re
@@ -426,13 +427,19 @@ def _script_json(data: Any) -> str:
 
 
 def to_html(policy: Policy, *, max_depth: int | None = None,
-            max_nodes: int | None = DEFAULT_MAX_NODES, static: list[str] | None = None) -> str:
+            max_nodes: int | None = DEFAULT_MAX_NODES, static: list[str] | None = None,
+            expand_limit: int | None = EXPAND_LIMIT) -> str:
     """Return the self-contained explorer page; depth cap and budget only set what starts
     folded; ``static`` (:func:`static_facts`) are listed with the truth of every node, marked
-    static. A lifted policy (format version 3) is embedded as it is and realised in the page,
-    a branch when it is unfolded (``explorer/explorer-lifted.js``, docs/rendering.md): the page
-    grows with the lifted file, never with its expansion; a version 2 policy is drawn by
-    ``explorer/explorer.js`` as before."""
+    static. A lifted policy (format version 3) is drawn expanded
+    (:func:`~ehatp.formats.lifted.expanded`) by ``explorer/explorer.js``, as a version 2
+    policy is, while it stands for at most ``expand_limit`` real nodes (0: never expanded);
+    past that it is embedded as it is and realised in the page, a branch when it is unfolded
+    (``explorer/explorer-lifted.js``, docs/rendering.md): the page grows with the lifted file,
+    never with its expansion."""
+    if policy.symmetry is not None:
+        with contextlib.suppress(PolicyTooLarge):
+            policy = expanded(policy, expand_limit)
     lifted = policy.symmetry is not None
     data = policy.to_dict()
     config = {"maxDepth": max_depth, "maxNodes": max_nodes, "staticFacts": static or []}
@@ -464,7 +471,8 @@ def render(path: str | Path | Policy, fmt: Format = Format.dot, *, max_depth: in
     explorer's static facts (:func:`to_html`)."""
     policy = path if isinstance(path, Policy) else read_policy(path)
     if fmt is Format.html:
-        return to_html(policy, max_depth=max_depth, max_nodes=max_nodes, static=static), []
+        return to_html(policy, max_depth=max_depth, max_nodes=max_nodes, static=static,
+                       expand_limit=expand_limit), []
     try:
         policy = expanded(policy, expand_limit)
     except PolicyTooLarge as e:
@@ -489,11 +497,11 @@ def static_facts(problem: Problem) -> list[str]:
 # --------------------------------------------------------------------------- notebooks
 
 
-def notebook_html(policy: Policy) -> str:
+def notebook_html(policy: Policy, expand_limit: int | None = EXPAND_LIMIT) -> str:
     """The offline explorer (``ehatp render --format html``) inline in a Jupyter notebook: the
     page in a sandboxed ``<iframe srcdoc>``, so that its styles and scripts stay out of the
-    notebook's. See ``docs/notebook.md``."""
-    page = html_escape(to_html(policy), quote=True)
+    notebook's. ``expand_limit`` as in :func:`to_html`. See ``docs/notebook.md``."""
+    page = html_escape(to_html(policy, expand_limit=expand_limit), quote=True)
     return (f'<iframe srcdoc="{page}" sandbox="allow-scripts" title="ehatp policy '
             f'{html_escape(policy.problem, quote=True)}" style="width: 100%; height: 640px; '
             'border: 1px solid #ccc;"></iframe>')
