@@ -68,20 +68,24 @@ def render_command(
             # past the limit it is drawn lifted, realised only as far as it is drawn
             with contextlib.suppress(PolicyTooLarge):
                 pol = expand_policy(prob, pol, max_nodes=expand_limit(limit))
+    too_large = None
+    if pol.symmetry is not None:  # expanded once here, or drawn lifted past the limit
+        try:
+            pol = expanded(pol, expand_limit(limit))
+        except PolicyTooLarge as e:
+            too_large = e
     with user_errors(policy):
         try:
             static = static_facts(prob) if prob is not None and fmt is Format.html else None
             text, notes = render(pol, fmt, max_depth=max_depth, max_nodes=max_nodes,
-                                 share=share, static=static, expand_limit=expand_limit(limit))
+                                 share=share, static=static, too_large=too_large)
         except DotMissing as e:
             die(str(e))
     if notes and out is None:
         typer.echo(printable(f"render: {policy}: collapsed: {'; '.join(notes)}"), err=True)
     kind = {Format.dot: "Graphviz DOT", Format.svg: "SVG", Format.html: "HTML explorer"}[fmt]
-    try:  # what was drawn: the expansion (done once more, within the limit), or the lifted
-        size = f"{len(expanded(pol, expand_limit(limit)).nodes):,} policy nodes"
-    except PolicyTooLarge:
-        size = f"lifted, {len(pol.nodes):,} canonical nodes"
+    size = (f"{len(pol.nodes):,} policy nodes" if pol.symmetry is None
+            else f"lifted, {len(pol.nodes):,} canonical nodes")
     what = f"{kind} of {pol.problem}, {size}"
     if notes:
         what += f" (collapsed: {'; '.join(notes)})"

@@ -461,22 +461,26 @@ def to_html(policy: Policy, *, max_depth: int | None = None,
 
 def render(path: str | Path | Policy, fmt: Format = Format.dot, *, max_depth: int | None = None,
            max_nodes: int | None = DEFAULT_MAX_NODES, share: bool | None = None,
-           static: list[str] | None = None,
-           expand_limit: int | None = EXPAND_LIMIT) -> tuple[str, list[str]]:
+           static: list[str] | None = None, expand_limit: int | None = EXPAND_LIMIT,
+           too_large: PolicyTooLarge | None = None) -> tuple[str, list[str]]:
     """Return the rendered text and the collapse notes (empty when drawn whole). A path is
     read with its structure checked (:func:`~ehatp.formats.policy_check.read_policy`); a
     lifted policy (format version 3) is drawn expanded
     (:func:`~ehatp.formats.lifted.expanded`), or, past ``expand_limit`` nodes over the real
-    objects, realised only as far as it is drawn (:func:`lifted_view`). ``static``: the
-    explorer's static facts (:func:`to_html`)."""
+    objects (``too_large``: known already, not tried again), realised only as far as it is
+    drawn (:func:`lifted_view`, :func:`to_html`). ``static``: the explorer's static facts
+    (:func:`to_html`)."""
     policy = path if isinstance(path, Policy) else read_policy(path)
-    if fmt is Format.html:
+    if too_large is None and policy.symmetry is not None:
+        try:
+            policy = expanded(policy, expand_limit)
+        except PolicyTooLarge as e:
+            too_large = e
+    if fmt is Format.html:  # expanded above, or drawn lifted
         return to_html(policy, max_depth=max_depth, max_nodes=max_nodes, static=static,
-                       expand_limit=expand_limit), []
-    try:
-        policy = expanded(policy, expand_limit)
-    except PolicyTooLarge as e:
-        policy, view = lifted_view(policy, e, max_depth=max_depth, max_nodes=max_nodes)
+                       expand_limit=0), []
+    if too_large is not None and policy.symmetry is not None:
+        policy, view = lifted_view(policy, too_large, max_depth=max_depth, max_nodes=max_nodes)
     else:
         view = plan_view(policy, max_depth=max_depth, max_nodes=max_nodes, share=share)
     dot = to_dot(policy, view)
