@@ -25,6 +25,7 @@ import re
 import shutil
 import subprocess
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from enum import StrEnum
 from html import escape as html_escape
@@ -109,6 +110,47 @@ def _below(policy: Policy, canon: list[int], start: int, drawn: set[int]) -> int
     return len(seen)
 
 
+def _breadth_first(has_moves: Callable[[int], bool], kids: Callable[[int], list[int]],
+                   max_depth: int | None, max_nodes: int | None
+                   ) -> tuple[list[int], list[tuple[int, int, int]], list[int], list[str]]:
+    """The breadth-first walk that decides what is drawn, from node 0: ``kids(i)`` gives the
+    nodes node ``i``'s moves lead to (asked only of a node with moves, within the depth cap).
+    A node below ``max_depth``, or whose new children would pass ``max_nodes``, is cut (all
+    its children or none). Return the nodes drawn in the walk's order, the edges drawn (from,
+    to, move index), the nodes cut, and the notes saying why."""
+    depth = {0: 0}
+    order = [0]
+    edges: list[tuple[int, int, int]] = []
+    cut: list[int] = []
+    cut_depth = cut_budget = 0
+    queue = deque([0])
+    while queue:
+        i = queue.popleft()
+        if not has_moves(i):
+            continue
+        if max_depth is not None and depth[i] >= max_depth:
+            cut.append(i)
+            cut_depth += 1
+            continue
+        below = kids(i)
+        new = list(dict.fromkeys(k for k in below if k not in depth))
+        if max_nodes is not None and len(order) + len(new) > max_nodes:
+            cut.append(i)
+            cut_budget += 1
+            continue
+        edges.extend((i, k, j) for j, k in enumerate(below))
+        for k in new:
+            depth[k] = depth[i] + 1
+            order.append(k)
+            queue.append(k)
+    notes = []
+    if cut_depth:
+        notes.append(f"cut at depth {max_depth} ({cut_depth} node(s) folded)")
+    if cut_budget:
+        notes.append(f"node budget {max_nodes} reached ({cut_budget} node(s) folded)")
+    return order, edges, cut, notes
+
+
 def plan_view(policy: Policy, *, max_depth: int | None = None,
               max_nodes: int | None = DEFAULT_MAX_NODES, share: bool | None = None) -> View:
     """Decide what to draw.
@@ -135,38 +177,13 @@ def plan_view(policy: Policy, *, max_depth: int | None = None,
     copies: dict[int, int] = {}
     for i, n in enumerate(policy.path_counts()):
         copies[canon[i]] = copies.get(canon[i], 0) + n
-    depth = {0: 0}
-    order = [0]
-    edges: list[tuple[int, int, int]] = []
-    cut: list[int] = []
-    cut_depth = cut_budget = 0
-    queue = deque([0])
-    while queue:
-        i = queue.popleft()
-        kids = [canon[m.to] for m in policy.nodes[i].moves]
-        if not kids:
-            continue
-        new = list(dict.fromkeys(k for k in kids if k not in depth))
-        if max_depth is not None and depth[i] >= max_depth:
-            cut.append(i)
-            cut_depth += 1
-            continue
-        if max_nodes is not None and len(order) + len(new) > max_nodes:
-            cut.append(i)
-            cut_budget += 1
-            continue
-        edges.extend((i, k, j) for j, k in enumerate(kids))
-        for k in new:
-            depth[k] = depth[i] + 1
-            order.append(k)
-            queue.append(k)
+    order, edges, cut, cuts = _breadth_first(
+        lambda i: bool(policy.nodes[i].moves),
+        lambda i: [canon[m.to] for m in policy.nodes[i].moves], max_depth, max_nodes)
+    notes += cuts
     drawn = set(order)
     # a folded node may have children drawn through another parent: it still gets its stub
     folded = {i: _below(policy, canon, i, drawn) for i in cut}
-    if cut_depth:
-        notes.append(f"cut at depth {max_depth} ({cut_depth} node(s) folded)")
-    if cut_budget:
-        notes.append(f"node budget {max_nodes} reached ({cut_budget} node(s) folded)")
     stands_for = {i: copies[i] for i in order if copies.get(i, 1) > 1}
     entering: dict[int, list[PolicyMove]] = {}
     for _, m in policy.edges():
@@ -208,34 +225,16 @@ def lifted_view(policy: Policy, too_large: PolicyTooLarge, *, max_depth: int | N
             views.append(view)
         return i
 
-    realise(0, ren.root)
-    depth = {0: 0}
-    order = [0]
-    edges: list[tuple[int, int, int]] = []
-    cut: list[int] = []
-    cut_depth = cut_budget = 0
     kids_of: dict[int, list[int]] = {}
-    queue = deque([0])
-    while queue:
-        i = queue.popleft()
-        n, tau = real[i]
-        if not views[i].moves:
-            continue
-        if max_depth is not None and depth[i] >= max_depth:
-            cut.append(i)
-            cut_depth += 1
-            continue
-        kids = kids_of[i] = [realise(m.to, ren.child(tau, m.renaming)) for m in views[i].moves]
-        new = list(dict.fromkeys(k for k in kids if k not in depth))
-        if len(order) + len(new) > budget:
-            cut.append(i)
-            cut_budget += 1
-            continue
-        edges.extend((i, k, j) for j, k in enumerate(kids))
-        for k in new:
-            depth[k] = depth[i] + 1
-            order.append(k)
-            queue.append(k)
+
+    def kids(i: int) -> list[int]:
+        tau = real[i][1]
+        kids_of[i] = [realise(m.to, ren.child(tau, m.renaming)) for m in views[i].moves]
+        return kids_of[i]
+
+    realise(0, ren.root)
+    order, edges, cut, cuts = _breadth_first(lambda i: bool(views[i].moves), kids, max_depth,
+                                             budget)
     drawn_nodes: list[PolicyNode] = []
     for i, view in enumerate(views):
         below = kids_of.get(i)
@@ -244,11 +243,7 @@ def lifted_view(policy: Policy, too_large: PolicyTooLarge, *, max_depth: int | N
         drawn_nodes.append(replace(view, id=i, moves=moves))
     drawn = replace(policy, nodes=drawn_nodes, symmetry=None)
     folded = {i: _canonical_below(policy, real[i][0]) for i in cut}
-    notes = [f"lifted, drawn without its expansion: {too_large}"]
-    if cut_depth:
-        notes.append(f"cut at depth {max_depth} ({cut_depth} node(s) folded)")
-    if cut_budget:
-        notes.append(f"node budget {budget} reached ({cut_budget} node(s) folded)")
+    notes = [f"lifted, drawn without its expansion: {too_large}", *cuts]
     entering: dict[int, list[PolicyMove]] = {}
     for a, b, j in edges:
         entering.setdefault(b, []).append(drawn_nodes[a].moves[j])
