@@ -173,6 +173,17 @@ def renamings(policy: Policy, atoms: Mapping[str, int] | None = None,
     return Renamings(policy.symmetry, atoms, tasks)
 
 
+def content(view: PolicyNode) -> str:
+    """What tells two real nodes of one canonical node apart: the node seen through a renaming,
+    as JSON, without where its moves lead (two renamings that give the same facts and the same
+    moves give one real node, :func:`expand`)."""
+    d = view.to_dict()
+    for m in d["moves"]:
+        del m["to"]
+        m.pop("renaming", None)
+    return json.dumps(d, sort_keys=True)
+
+
 def expand(policy: Policy, atoms: Mapping[str, int] | None = None,
            tasks: Mapping[str, int] | None = None,
            check: Callable[[], None] | None = None, max_nodes: int | None = None) -> Policy:
@@ -195,11 +206,7 @@ def expand(policy: Policy, atoms: Mapping[str, int] | None = None,
     def key(n: int, tau: Perm) -> tuple[int, str]:
         k = keys.get((n, tau))
         if k is None:
-            d = ren.node(tau, policy.nodes[n]).to_dict()
-            for m in d["moves"]:
-                del m["to"]
-                m.pop("renaming", None)
-            k = keys[(n, tau)] = (n, json.dumps(d, sort_keys=True))
+            k = keys[(n, tau)] = (n, content(ren.node(tau, policy.nodes[n])))
         return k
 
     order: list[tuple[int, Perm]] = []
@@ -261,5 +268,5 @@ def real_branches(policy: Policy) -> Iterator[list[PathStep]]:
             stack.append(([*path, PathStep(m, ren.node(child, nodes[m.to]))], child))
 
 
-__all__ = ["EXPAND_LIMIT", "TOKEN", "Perm", "Renamings", "expand", "expanded", "real_branches",
-           "renamings"]
+__all__ = ["EXPAND_LIMIT", "TOKEN", "Perm", "Renamings", "content", "expand", "expanded",
+           "real_branches", "renamings"]

@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..errors import DotMissing, PolicyTooLarge, printable
 from ..model.problem import call_str
-from .lifted import EXPAND_LIMIT, Perm, expanded, renamings
+from .lifted import EXPAND_LIMIT, Perm, content, expanded, renamings
 from .policy import COMM_KINDS, Policy, PolicyMove, PolicyNode
 from .policy_check import read_policy
 
@@ -213,11 +213,7 @@ def lifted_view(policy: Policy, too_large: PolicyTooLarge, *, max_depth: int | N
 
     def realise(n: int, tau: Perm) -> int:
         view = ren.node(tau, nodes[n])
-        d = view.to_dict()
-        for m in d["moves"]:
-            del m["to"]
-            m.pop("renaming", None)
-        key = (n, json.dumps(d, sort_keys=True))
+        key = (n, content(view))
         i = ids.get(key)
         if i is None:
             i = ids[key] = len(views)
