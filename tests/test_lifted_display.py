@@ -218,3 +218,16 @@ def test_expand_stops_at_its_limit_writing_nothing_and_without_one_writes_the_gr
     # as many as the policy of the search without symmetry has (the text-only expansion keeps
     # two canonical nodes apart even where they map to one real state: 817)
     assert r.exit_code == 0 and len(Policy.load(out).nodes) == 562
+
+
+def test_show_with_its_problem_past_the_limit_prints_the_same_timelines(
+        c8: tuple[Path, Policy]) -> None:
+    # --problem expands by the problem's semantics (562 real nodes here); past the limit the
+    # branches are realised from the file as without --problem, the same moves step for step
+    path, _ = c8
+    problem = path.with_name("c8.toml")
+    code, full = invoke("show", path, "--problem", problem, "--expand-limit", 0)
+    assert code == 0 and "graph: 562 nodes" in full
+    code, limited = invoke("show", path, "--problem", problem, "--expand-limit", 100)
+    assert code == 0 and "more than 100 nodes over the real objects" in limited
+    assert _timelines(limited)[:-1] == _timelines(full)[:-1]

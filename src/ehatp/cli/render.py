@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import contextlib
 from pathlib import Path
 
 import typer
@@ -58,6 +57,7 @@ def render_command(
     with user_errors(policy):
         pol = read_policy(policy)
     prob = None if problem is None else load_problem(problem)
+    too_large = None  # past the limit a lifted policy is drawn realised as far as it is drawn
     with user_errors(policy):
         if prob is not None:
             check_policy_problem(pol, policy, prob)
@@ -65,11 +65,11 @@ def render_command(
         if prob is not None and pol.symmetry is not None:  # lifted: the problem's own labels
             from ..run.expand import expand_policy
 
-            # past the limit it is drawn lifted, realised only as far as it is drawn
-            with contextlib.suppress(PolicyTooLarge):
+            try:
                 pol = expand_policy(prob, pol, max_nodes=expand_limit(limit))
-    too_large = None
-    if pol.symmetry is not None:  # expanded once here, or drawn lifted past the limit
+            except PolicyTooLarge as e:
+                too_large = e
+    if too_large is None and pol.symmetry is not None:  # expanded once, here
         try:
             pol = expanded(pol, expand_limit(limit))
         except PolicyTooLarge as e:

@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import sys
 from pathlib import Path
 from typing import Annotated
@@ -53,18 +52,21 @@ def show_cmd(
     move is legal is `ehatp validate`'s.
     """
     pol = load_policy(policy, problem, consistent=True)
+    too_large = None  # then its branches are realised one at a time (policy_lines)
     if problem is not None and pol.symmetry is not None:  # lifted: its real labels
         from ..errors import PolicyTooLarge
         from ..run.expand import expand_policy
         from .common import load_problem, user_errors
 
-        # too large to print whole: its branches are realised one at a time (policy_lines)
-        with user_errors(policy), contextlib.suppress(PolicyTooLarge):
-            pol = expand_policy(load_problem(problem), pol, max_nodes=expand_limit(limit))
+        with user_errors(policy):
+            try:
+                pol = expand_policy(load_problem(problem), pol, max_nodes=expand_limit(limit))
+            except PolicyTooLarge as e:
+                too_large = e
     from ..formats.text import plain, policy_lines, print_rich
 
     lines = policy_lines(pol, tree=tree, timelines=timelines, details=details,
-                         expand_limit=expand_limit(limit))
+                         expand_limit=expand_limit(limit), too_large=too_large)
     if sys.stdout.isatty():
         from rich.console import Console
 

@@ -239,16 +239,20 @@ def timeline_lines(policy: Policy, limit: int | None = MAX_TIMELINES,
 
 def policy_lines(policy: Policy, *, tree: bool = True, timelines: bool = True,
                  details: bool = False, max_timelines: int | None = MAX_TIMELINES,
-                 expand_limit: int | None = EXPAND_LIMIT) -> list[Line]:
+                 expand_limit: int | None = EXPAND_LIMIT,
+                 too_large: PolicyTooLarge | None = None) -> list[Line]:
     """The lines of ``ehatp show``; a lifted policy (format version 3) is expanded first
     (:func:`~ehatp.formats.lifted.expanded`), unless it stands for more than ``expand_limit``
     nodes over the real objects: then the tree is left out (said in one line) and the
     timelines' branches are realised one at a time (:func:`~ehatp.formats.lifted.real_branches`),
-    so the work is the branches printed, not the expansion. A policy in joint steps
+    so the work is the branches printed, not the expansion (``too_large``: known already, not
+    tried again). A policy in joint steps
     (docs/concurrent.md) is printed a step a line (:func:`joint_tree_lines`,
     :func:`joint_timeline_lines`), with its preference vectors when it has them
     (:class:`Preferences`)."""
     try:
+        if too_large is not None and policy.symmetry is not None:
+            raise too_large
         policy = expanded(policy, expand_limit)
     except PolicyTooLarge as e:
         lines = header(policy, e)
