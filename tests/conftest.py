@@ -138,6 +138,15 @@ def policy_text(p: Problem, **options: Any) -> tuple[str, str]:
     return r.status, json.dumps(data, sort_keys=True)
 
 
+def same_policy_either_way(p: Problem, option: str,
+                           symmetries: tuple[bool | None, ...] = (None, False)) -> None:
+    """Assert that ``p`` gets the same :func:`policy_text` with the solve option ``option``
+    on and off, under each of ``symmetries``."""
+    for symmetry in symmetries:
+        assert (policy_text(p, **{option: True, "symmetry": symmetry})
+                == policy_text(p, **{option: False, "symmetry": symmetry}))
+
+
 def random_policies_agree(seeds: range, first: dict[str, Any], second: dict[str, Any],
                           symmetries: tuple[bool | None, ...] = (None,)) -> int:
     """Assert that the random problems of ``seeds`` get the same :func:`policy_text` solved

@@ -20,7 +20,14 @@ from ehatp.search.andor import search
 from ehatp.search.bounds import INF, Bounds
 from ehatp.search.graph import DEAD, EXPANDED, GOAL, OPEN, Graph
 
-from .conftest import EXAMPLES, TABLE1, Example, policy_text, random_policies_agree
+from .conftest import (
+    EXAMPLES,
+    TABLE1,
+    Example,
+    policy_text,
+    random_policies_agree,
+    same_policy_either_way,
+)
 
 # --- a hand-built graph --------------------------------------------------------------------
 
@@ -299,15 +306,9 @@ def test_the_focused_search_expands_a_subset_of_the_search_by_f(example: Example
         assert focused <= by_f and len(focused) < len(by_f)
 
 
-def _policy(p: ehatp.Problem, focus: bool, symmetry: bool | None = None) -> tuple[str, str]:
-    return policy_text(p, focus=focus, symmetry=symmetry)
-
-
 @pytest.mark.parametrize("example", EXAMPLES, ids=str)
 def test_every_example_has_the_same_policy_focused_or_not(example: Example) -> None:
-    p = ehatp.load(example.path)
-    for symmetry in (None, False):
-        assert _policy(p, True, symmetry) == _policy(p, False, symmetry)
+    same_policy_either_way(ehatp.load(example.path), "focus")
 
 
 def test_random_problems_have_the_same_policy_focused_or_not() -> None:
@@ -324,7 +325,7 @@ def test_an_unsolvable_problem_is_explained_as_the_search_by_f_explains_it() -> 
     # random problem 24 has no policy; the focused search proves it, then explores everything
     # reachable, as the search by f does, and says why in the same words
     p = randomgen.problem(24)
-    on, off = _policy(p, True), _policy(p, False)
+    on, off = policy_text(p, focus=True), policy_text(p, focus=False)
     assert on[0] == "unsolvable" and on == off
     assert on[1].startswith("no policy exists: the goal needs")
     # the same states explored, once: no second search

@@ -17,7 +17,13 @@ from ehatp.search.heuristic import INF, Heuristic, least_costs
 from ehatp.search.interchangeable import detect
 from ehatp.search.values import knuth
 
-from .conftest import EXAMPLES_DIR, TABLE1, Example, policy_text, random_policies_agree
+from .conftest import (
+    EXAMPLES_DIR,
+    TABLE1,
+    Example,
+    random_policies_agree,
+    same_policy_either_way,
+)
 from .scenarios import problem, walk
 
 
@@ -146,16 +152,9 @@ def test_fewer_states_with_the_bound_same_policy() -> None:
 
 # -- the same results -------------------------------------------------------------------------
 
-def _policy(p: ehatp.Problem, on: bool, symmetry: bool | None = None) -> tuple[str, str]:
-    """The status and the policy's JSON without its statistics (states counted differ)."""
-    return policy_text(p, heuristic=on, symmetry=symmetry)
-
-
 @pytest.mark.parametrize("example", TABLE1, ids=str)
 def test_table1_policies_do_not_change(example: Example) -> None:
-    p = ehatp.load(example.path)
-    for symmetry in (True, False):
-        assert _policy(p, True, symmetry) == _policy(p, False, symmetry)
+    same_policy_either_way(ehatp.load(example.path), "heuristic", (True, False))
 
 
 @pytest.mark.slow  # 300 random problems, each solved twice
