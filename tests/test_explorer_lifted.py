@@ -19,7 +19,7 @@ from ehatp.experiments import bench
 from ehatp.experiments.examples import examples_dir
 from ehatp.formats.lifted import Renamings, expanded
 from ehatp.formats.policy import COMM_KINDS, PathStep, Policy, PolicyMove, PolicyNode, timeline
-from ehatp.formats.render import Explorer, _asset, notebook_html, to_html
+from ehatp.formats.render import Explorer, _asset, explorer_script, notebook_html, to_html
 
 from .test_render import (  # noqa: F401  (browser is a fixture)
     SMALLEST_TEXT,
@@ -115,22 +115,21 @@ def test_a_lifted_page_embeds_the_lifted_policy_not_its_expansion(tmp_path: Path
     policy = bench_policy(tmp_path, "cubes-c12-b2-opaque-k2")
     page = to_html(policy, expand_limit=0)
     assert embedded(page, "policy-data") == json.loads(json.dumps(policy.to_dict()))
-    assert _asset("explorer-lifted.js") in page and _asset("explorer.js") not in page
-    own = sum(len(_asset(a)) for a in ("explorer.html", "explorer.css", "explorer-lifted.js"))
+    assert explorer_script(True) in page and _asset("explorer-eager.js") not in page
+    own = len(_asset("explorer.html")) + len(_asset("explorer.css")) + len(explorer_script(True))
     lifted = len(json.dumps(policy.to_dict(), ensure_ascii=False, separators=(",", ":")))
     assert len(page) < 1.05 * lifted + own
     e = expanded(policy)
     assert len(e.nodes) > 10 * len(policy.nodes)
-    assert len(to_html(e)) > 20 * len(page)  # 10.6 MB against 251 kB
+    assert len(to_html(e)) > 20 * len(page)  # 10.6 MB against 258 kB
 
 
 def test_a_version_2_page_is_the_eager_explorer_as_before() -> None:
-    """A policy over real states is drawn by explorer.js with its graph embedded, as before
-    (its page is byte-identical to the one before lifted pages existed: checked by hand
-    against the main branch, see docs/rendering.md)."""
+    """A policy over real states is drawn by the eager model (explorer-eager.js, after the
+    shared explorer.js) with its graph embedded, as before lifted pages existed."""
     e = expanded(example_policy("p2"))
     page = to_html(e)
-    assert _asset("explorer.js") in page and _asset("explorer-lifted.js") not in page
+    assert explorer_script(False) in page and _asset("explorer-lifted.js") not in page
     assert embedded(page, "policy-data") == json.loads(json.dumps(e.to_dict()))
 
 

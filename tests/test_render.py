@@ -289,7 +289,8 @@ def test_html_survives_hostile_strings(policy_files: dict[str, Path], tmp_path: 
 def test_explorer_assets_are_package_data() -> None:
     # the wheel ships src/ehatp as a whole, so the explorer files only need to sit in it
     here = Path(rd.__file__).parent / "explorer"
-    assert {p.name for p in here.iterdir()} >= {"explorer.html", "explorer.css", "explorer.js"}
+    assert {p.name for p in here.iterdir()} >= {"explorer.html", "explorer.css", "explorer.js",
+                                                "explorer-eager.js", "explorer-lifted.js"}
 
 
 # --------------------------------------------------------------------------- real browser

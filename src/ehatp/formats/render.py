@@ -406,6 +406,16 @@ def _asset(name: str) -> str:
     return (resources.files("ehatp.formats") / "explorer" / name).read_text(encoding="utf-8")
 
 
+def explorer_script(lifted: bool) -> str:
+    """The explorer page's one script: the code both pages share (``explorer/explorer.js``,
+    which defines ``ehatpExplorer``: drawing, folding, details, timeline), then the page's
+    model of the policy, which calls it: the eager one over the embedded version 2 graph
+    (``explorer/explorer-eager.js``) or, for a ``lifted`` policy, the lazy one
+    (``explorer/explorer-lifted.js``). See docs/rendering.md."""
+    return _asset("explorer.js") + "\n" + _asset(
+        "explorer-lifted.js" if lifted else "explorer-eager.js")
+
+
 def _script_json(data: Any) -> str:
     # safe inside <script>: no "</script", no "<!--"; escaping "/" also keeps any URL-looking
     # string in the data from appearing literally in the page
@@ -422,12 +432,12 @@ def to_html(policy: Policy, *, max_depth: int | None = None,
             expand_limit: int | None = EXPAND_LIMIT) -> str:
     """Return the self-contained explorer page; depth cap and budget only set what starts
     folded; ``static`` (:func:`static_facts`) are listed with the truth of every node, marked
-    static. A lifted policy (format version 3) is drawn expanded
-    (:func:`~ehatp.formats.lifted.expanded`) by ``explorer/explorer.js``, as a version 2
-    policy is, while it stands for at most ``expand_limit`` real nodes (0: never expanded);
-    past that it is embedded as it is and realised in the page, a branch when it is unfolded
-    (``explorer/explorer-lifted.js``, docs/rendering.md): the page grows with the lifted file,
-    never with its expansion."""
+    static. The script is :func:`explorer_script`. A lifted policy (format version 3) is
+    drawn expanded (:func:`~ehatp.formats.lifted.expanded`) by the eager model
+    (``explorer/explorer-eager.js``), as a version 2 policy is, while it stands for at most
+    ``expand_limit`` real nodes (0: never expanded); past that it is embedded as it is and
+    realised in the page, a branch when it is unfolded (``explorer/explorer-lifted.js``,
+    docs/rendering.md): the page grows with the lifted file, never with its expansion."""
     if policy.symmetry is not None:
         with contextlib.suppress(PolicyTooLarge):
             policy = expanded(policy, expand_limit)
@@ -439,7 +449,7 @@ def to_html(policy: Policy, *, max_depth: int | None = None,
         "title": html_escape(f"{policy.problem} — ehatp policy").replace(":", "&#58;")
         .replace("/", "&#47;").replace("\u2028", "&#8232;").replace("\u2029", "&#8233;"),
         "css": _asset("explorer.css"),
-        "js": _asset("explorer-lifted.js" if lifted else "explorer.js"),
+        "js": explorer_script(lifted),
         "policy_json": _script_json(data),
         "config_json": _script_json(config),
     }
@@ -514,5 +524,6 @@ class Explorer:
 
 
 __all__ = ["DEFAULT_MAX_NODES", "INSTALL_DOT", "DotMissing", "Explorer", "Format", "View",
-           "entry_move", "k_text", "node_attrs", "notebook_html", "plan_view", "render",
-           "static_facts", "subgraph_hashes", "to_dot", "to_html", "to_svg", "worlds_text"]
+           "entry_move", "explorer_script", "k_text", "node_attrs", "notebook_html",
+           "plan_view", "render", "static_facts", "subgraph_hashes", "to_dot", "to_html",
+           "to_svg", "worlds_text"]

@@ -1,7 +1,17 @@
 /* ehatp policy explorer: the policy tree with pan/zoom and folding, a node's worlds, and a
  * branch as a timeline. Plain JS with no dependencies: the page must work offline from one
- * file, and a tidy layout plus viewBox pan/zoom is too little code to justify a library. */
-(function () {
+ * file, and a tidy layout plus viewBox pan/zoom is too little code to justify a library.
+ *
+ * This is the part both pages share (render.py puts it first in the page's one script). The
+ * page's own script then calls ehatpExplorer with a function that builds its *model* of the
+ * policy from the shared pieces:
+ *   explorer-eager.js   a version 2 graph embedded whole: every tree item made at once, a
+ *                       node drawn at its first path and referenced at the others;
+ *   explorer-lifted.js  a lifted policy (format version 3): items realised through the
+ *                       renamings when their parent is unfolded.
+ * The model answers what the two pages do differently (docs/rendering.md): how items are
+ * made, how a node is named and linked, the URL fragment, the counts and the branch list. */
+function ehatpExplorer(pageModel) {
   "use strict";
 
   const $ = (id) => document.getElementById(id);
@@ -19,36 +29,33 @@
   // and at most SCREENS pane widths wide (the rest starts folded)
   const W = 160, H = 40, DX = 176, DY = 74, MIN_SCALE = 1, SCREENS = 3;
 
-  // The policy is a graph (docs/policy-format.md); it is drawn as a tree of *items*, one per
-  // move plus the root, depth-first in move order. A node is expanded at its first item (in
-  // id order, since ids are that same preorder); every later move into it is a reference item
-  // with no children that links to the first copy. Items are linear in the graph's size.
-  const items = []; // {node, move, parent, kids, ref}
-  const firstItem = new Map(); // node id -> its expanded item
-  for (const stack = [{ node: 0, move: null, parent: -1 }]; stack.length;) {
-    const x = stack.pop();
-    const idx = items.length;
-    const ref = firstItem.has(x.node);
-    items.push({ node: x.node, move: x.move, parent: x.parent, kids: [], ref, depth: 0 });
-    if (x.parent >= 0) {
-      items[idx].depth = items[x.parent].depth + 1;
-      items[x.parent].kids.push(idx);
+  // The tree is drawn as *items*, one per move along a path plus the root, which the model
+  // makes: {node, view (the node as drawn), move (the move into it, null at the root),
+  // parent, depth, width (how many children it has or will have: 0 for a leaf and for a
+  // reference), kids (item indices; null until the model makes them), sibling, ref (a
+  // reference: a dashed box leading to its node's first copy)}, plus the model's own fields.
+  const items = [];
+  const collapsed = new Set(); // item indices
+  const width = (it) => items[it].width;
+  let model = null;
+
+  function kidsOf(it) {
+    // the item's children, made by the model the first time they are asked for
+    const item = items[it];
+    if (!item.kids) {
+      item.kids = model.makeKids(it);
+      tellApart(item.kids);
     }
-    if (ref) continue;
-    firstItem.set(x.node, idx);
-    const moves = nodes[x.node].moves;
-    for (let j = moves.length - 1; j >= 0; j--) {
-      stack.push({ node: moves[j].to, move: moves[j], parent: idx });
-    }
+    return item.kids;
   }
+
   // sibling moves with the same label (agent and action) cannot be told apart by it: each gets
   // its number among them and what its next node differs by (the literals told, the human's
-  // agendas, the robot's, the facts true there and not at every sibling's), computed per node
-  const siblingOf = new Map(); // move object -> {k, n, what}
+  // agendas, the robot's, the facts true there and not at every sibling's)
   function differs(group) {
-    const told = group.map((m) => (m.told || []).join(", "));
+    const told = group.map((x) => (items[x].move.told || []).join(", "));
     if (new Set(told).size > 1) return told.map((t) => (t ? `says ${t}` : "says nothing"));
-    const next = group.map((m) => nodes[m.to]);
+    const next = group.map((x) => items[x].view);
     const agendas = (n) => (n.hypotheses && n.hypotheses.length > 1 ? n.hypotheses : [n.human_agenda])
       .map((a) => a.join(", ") || "nothing").join(" | ");
     const human = next.map(agendas);
@@ -63,30 +70,22 @@
       const minus = [...every].filter((a) => !mine.has(a)).sort().map((a) => `not ${a}`);
       const facts = [...plus, ...minus];
       return facts.length ? facts.slice(0, 3).join(", ") + (facts.length > 3 ? ", …" : "")
-        : `→ node ${n.id}`;
+        : `→ node ${model.nodeId(n)}`;
     });
   }
-  for (const n of nodes) {
+  function tellApart(kids) {
+    // the siblings of one item: numbered, and told apart, where their labels are the same
     const groups = new Map();
-    for (const m of n.moves) {
+    for (const x of kids) {
+      const m = items[x].move;
       const key = `${m.agent}\u0000${m.action}`;
       if (!groups.has(key)) groups.set(key, []);
-      groups.get(key).push(m);
+      groups.get(key).push(x);
     }
     for (const group of groups.values()) {
       if (group.length < 2) continue;
       const what = differs(group);
-      group.forEach((m, i) => siblingOf.set(m, { k: i + 1, n: group.length, what: what[i] }));
-    }
-  }
-  const sizeOf = new Array(items.length).fill(1); // items below, folded or not
-  for (let i = items.length - 1; i > 0; i--) sizeOf[items[i].parent] += sizeOf[i];
-  const parentsOf = new Map(); // node id -> ids of the nodes with a move into it
-  for (const n of nodes) {
-    for (const m of n.moves) {
-      if (!parentsOf.has(m.to)) parentsOf.set(m.to, []);
-      const ps = parentsOf.get(m.to);
-      if (!ps.includes(n.id)) ps.push(n.id);
+      group.forEach((x, i) => { items[x].sibling = { k: i + 1, n: group.length, what: what[i] }; });
     }
   }
 
@@ -95,10 +94,10 @@
   const gEdges = $("edges");
   const gNodes = $("nodes");
 
-  const collapsed = new Set(); // item indices
   let selected = null; // item index
   let pos = new Map(); // item index -> {x, y}
   let visibleCount = 0;
+  let expandNote = ""; // set when "expand all" stops at the model's budget
   let vb = { x: 0, y: 0, w: 1000, h: 600 };
 
   function el(tag, attrs, parent, text) {
@@ -117,17 +116,22 @@
   }
 
   const plural = (n, word) => `${n} ${word}${n === 1 ? "" : "s"}`;
-  const siblingTag = (m) => {
-    const s = m && siblingOf.get(m);
+  const count = (x) => x.toLocaleString("en-US");
+  const siblingTag = (it) => {
+    const s = items[it].sibling;
     return s ? ` (${s.k}/${s.n})` : "";
   };
-  const moveLabel = (m) => (m ? `${m.agent}: ${m.action}${siblingTag(m)}` : "start");
-  const label = (it) => moveLabel(items[it].move);
+  const label = (it) => {
+    const m = items[it].move;
+    return m ? `${m.agent}: ${m.action}${siblingTag(it)}` : "start";
+  };
   const role = (agent) => (agent === ROBOT ? "robot" : agent === HUMAN ? "human" : "");
   const kindOf = (it) => (items[it].move ? items[it].move.kind : "start");
-  const nodeOf = (it) => nodes[items[it].node];
-  const shownLeaf = (it) => collapsed.has(it) || items[it].kids.length === 0;
+  const nodeOf = (it) => items[it].view;
+  const shownLeaf = (it) => collapsed.has(it) || !width(it);
   const kText = (n) => `k=${n.k}/${policy.K}`; // unseen robot turns of the bound K
+  // where a reference leads: its node's first copy
+  const drawnAt = (it) => (items[it].ref ? model.first(items[it].node) : it);
 
   function kindClasses(it) {
     const c = ["node"];
@@ -147,21 +151,24 @@
 
   function initialFolding() {
     // fold below the depth cap, where the breadth-first budget runs out, and where the tree
-    // would get wider than a few screens at the readable scale (a column per shown leaf)
+    // would get wider than a few screens at the readable scale (a column per shown leaf);
+    // what is not reached stays as the model made it (eager: unfolded, lifted: folded)
     const maxDepth = config.maxDepth, budget = config.maxNodes;
     const maxColumns = Math.max(4, Math.floor(SCREENS * (svg.clientWidth || 1000) / MIN_SCALE / DX));
     let shown = 1, columns = 1;
     const queue = [0];
     for (let q = 0; q < queue.length; q++) {
       const it = queue[q];
-      const kids = items[it].kids;
-      if (!kids.length) continue;
+      const wide = width(it);
+      if (!wide) continue;
       const deep = maxDepth !== null && maxDepth !== undefined && items[it].depth >= maxDepth;
-      const full = budget !== null && budget !== undefined && shown + kids.length > budget;
-      if (deep || full || columns + kids.length - 1 > maxColumns) {
+      const full = budget !== null && budget !== undefined && shown + wide > budget;
+      if (deep || full || columns + wide - 1 > maxColumns) {
         collapsed.add(it);
         continue;
       }
+      collapsed.delete(it);
+      const kids = kidsOf(it);
       shown += kids.length;
       columns += kids.length - 1;
       queue.push(...kids);
@@ -175,7 +182,7 @@
     for (const stack = [0]; stack.length;) {
       const it = stack.pop();
       visible.push(it);
-      if (collapsed.has(it)) continue;
+      if (shownLeaf(it)) continue;
       const kids = items[it].kids;
       for (let i = kids.length - 1; i >= 0; i--) stack.push(kids[i]);
     }
@@ -215,34 +222,27 @@
       tabindex: "0",
       role: "button",
       transform: `translate(${p.x - W / 2},${p.y - H / 2})`,
+      ...model.boxHooks(it), // the ids tests and scripts find the box by, its aria-label
     };
-    if (item.ref) {
-      attrs["data-ref-id"] = n.id;
-      attrs["aria-label"] = `${label(it)}: leads to node ${n.id}, drawn at its first path`;
-    } else {
-      attrs["data-node-id"] = n.id;
-      attrs["aria-label"] = `node ${n.id}: ${label(it)}, ${plural(n.worlds, "world")}`;
-    }
     const g = el("g", attrs, gNodes);
-    const same = m && siblingOf.get(m);
+    const same = item.sibling;
     const apart = same ? `\n${same.n} sibling moves read the same; this one: ${same.what}` : "";
     el("title", {}, g, item.ref
       ? `${label(it)}\n→ node ${n.id}, shared by several paths: click to go to its first copy${apart}`
-      : `#${n.id} ${label(it)}\ncost ${m ? m.cost : 0}, cost to go ${n.value}${apart}`);
+      : `${model.tag(it)} ${label(it)}\ncost ${m ? m.cost : 0}, cost to go ${n.value}${apart}`);
     if (m && COMM.has(m.kind)) el("rect", { class: "halo", x: -6, y: -6, width: W + 12, height: H + 12, rx: 9 }, g);
     if (n.goal && !item.ref) el("rect", { class: "goal-ring", x: -4, y: -4, width: W + 8, height: H + 8, rx: 8 }, g);
     const human = m && m.agent === HUMAN;
     el("rect", { class: "box", x: 0, y: 0, width: W, height: H, rx: human ? H / 2 : 5 }, g);
     if (!n.copresent) el("rect", { class: "apart-bar", x: human ? 10 : 0, y: 0, width: 5, height: H }, g);
-    const tag = siblingTag(m);
+    const tag = siblingTag(it);
     el("text", { x: W / 2, y: 17, "text-anchor": "middle" }, g,
       m ? truncate(`${m.agent}: ${m.action}`, 24 - tag.length) + tag : "start");
-    const sibling = m && siblingOf.get(m);
     let sub;
-    if (sibling) {
-      g.setAttribute("data-sibling", `${sibling.k}/${sibling.n}`);
-      g.setAttribute("data-differs", sibling.what);
-      sub = [truncate(sibling.what, 28)];
+    if (same) {
+      g.setAttribute("data-sibling", `${same.k}/${same.n}`);
+      g.setAttribute("data-differs", same.what);
+      sub = [truncate(same.what, 28)];
     } else if (item.ref) {
       sub = [`→ see node ${n.id}`];
     } else {
@@ -256,10 +256,10 @@
       el("circle", { r: 10 }, b);
       el("text", { y: 4, "text-anchor": "middle" }, b, String(n.worlds));
     }
-    if (item.kids.length) {
+    if (width(it)) {
       const folded = collapsed.has(it);
       const t = el("g", {
-        class: "toggle", "data-toggle-id": n.id, "data-toggle-item": it, role: "button",
+        class: "toggle", ...model.toggleHooks(it), "data-toggle-item": it, role: "button",
         "aria-label": folded ? "expand" : "collapse",
         transform: `translate(${p.x},${p.y + H / 2 + 8})`,
       }, gNodes);
@@ -268,7 +268,7 @@
       el("circle", { r: 7 }, t);
       el("text", { y: 4, "text-anchor": "middle" }, t, folded ? "+" : "−");
       if (folded) {
-        el("text", { class: "folded-count", x: 11, y: 4 }, t, `${sizeOf[it] - 1} more`);
+        el("text", { class: "folded-count", x: 11, y: 4 }, t, `${model.below(it)} more`);
       }
     }
   }
@@ -293,7 +293,7 @@
     gEdges.textContent = "";
     gNodes.textContent = "";
     for (const it of visible) {
-      if (collapsed.has(it)) continue;
+      if (shownLeaf(it)) continue;
       const p = pos.get(it);
       for (const c of items[it].kids) {
         const q = pos.get(c);
@@ -309,8 +309,7 @@
     }
     for (const it of visible) drawNode(it, pos.get(it));
     markSelected();
-    const shownNodes = visible.filter((it) => !items[it].ref).length;
-    $("node-count").textContent = `${shownNodes} of ${plural(nodes.length, "node")} shown`;
+    $("node-count").textContent = model.shownText(visible) + expandNote;
   }
 
   // ------------------------------------------------------------------ pan and zoom
@@ -339,7 +338,7 @@
     const root = pos.get(0);
     const w = rw / MIN_SCALE, hh = rh / MIN_SCALE;
     // the root and, when it fits beside it, its first child (where the first branch goes)
-    const kid = items[0].kids.length && !collapsed.has(0) ? pos.get(items[0].kids[0]) : root;
+    const kid = width(0) && !collapsed.has(0) ? pos.get(items[0].kids[0]) : root;
     const reach = w / 2 - W / 2 - 20;
     const cx = Math.max((root.x + kid.x) / 2, root.x - reach);
     vb = { x: cx - w / 2, y: root.y - H / 2 - 30, w, h: hh };
@@ -438,20 +437,18 @@
       : `The human entertains ${plural(n.worlds, "world")}, all equal to the truth.`;
   }
 
-  function gotoButton(id, text, move) {
-    // a button to the node's first copy in the tree (data-goto: the node id)
-    const it = firstItem.get(id);
-    const m = move || items[it].move;
-    const b = h("button", { type: "button", class: "goto" + (m && COMM.has(m.kind) ? " comm" : ""), "data-goto": id },
-      text || `#${id} ${moveLabel(m)}`);
-    return b;
+  function gotoButton(it) {
+    // a button to a tree item, named by the model (data-goto: the model's key for it)
+    const m = items[it].move;
+    return h("button", { type: "button", class: "goto" + (m && COMM.has(m.kind) ? " comm" : ""),
+      "data-goto": model.key(it) }, `${model.tag(it)} ${label(it)}`);
   }
 
   function showDetails(it) {
     const n = nodeOf(it), m = items[it].move;
     $("details-empty").hidden = true;
     $("details-body").hidden = false;
-    $("node-title").textContent = `Node ${n.id}${n.goal ? " — goal reached" : ""}`;
+    $("node-title").textContent = `${model.title(it)}${n.goal ? " — goal reached" : ""}`;
     const action = $("fact-action");
     action.textContent = m ? m.action : "start";
     action.className = m && COMM.has(m.kind) ? "comm-text" : "";
@@ -465,22 +462,23 @@
     $("fact-k").textContent = `${n.k} of K = ${policy.K} robot turns unseen by the human`;
     $("fact-worlds").textContent = String(n.worlds);
     $("fact-to-move").textContent = n.to_move || "nobody (goal reached)";
-    const same = m && siblingOf.get(m);
+    const same = items[it].sibling;
     $("fact-differs").textContent = same
       ? `move ${same.k} of ${same.n} that read "${m.agent}: ${m.action}"; this one: ${same.what}` : "";
     $("fact-differs-term").hidden = $("fact-differs").hidden = !same;
     const nav = $("node-nav");
     nav.textContent = "";
-    const ups = parentsOf.get(n.id) || [];
-    if (ups.length) {
-      nav.append(ups.length > 1 ? `from (${ups.length} nodes lead here): ` : "from: ");
-      for (const u of ups) nav.append(gotoButton(u));
+    const from = model.from(it); // {text, items}: the links up, or null
+    if (from) {
+      nav.append(from.text);
+      for (const u of from.items) nav.append(gotoButton(u));
       nav.append(h("br"));
     }
-    if (n.moves.length) {
+    if (width(it)) {
       nav.append("next: ");
-      for (const c of n.moves) nav.append(gotoButton(c.to, `#${c.to} ${moveLabel(c)}`, c));
+      for (const c of kidsOf(it)) nav.append(gotoButton(c));
     }
+    model.withWorlds(n); // a lazy model renames the worlds only now
     worldTable(n);
     const doubted = new Set(n.divergence);
     const ul = $("designated-world");
@@ -506,10 +504,9 @@
     // reference, on from the node's first copy)
     const path = [...ancestors(it).reverse(), it];
     for (let cur = it; ;) {
-      const from = items[cur].ref ? firstItem.get(items[cur].node) : cur;
-      const kids = items[from].kids;
-      if (!kids.length) break;
-      cur = kids[0];
+      const from = drawnAt(cur);
+      if (!width(from)) break;
+      cur = kidsOf(from)[0];
       path.push(cur);
     }
     return path;
@@ -518,7 +515,8 @@
   function showTimeline(it) {
     const path = branchThrough(it);
     const upto = path.indexOf(it);
-    const leaf = nodeOf(path[path.length - 1]);
+    const last = path[path.length - 1];
+    const leaf = nodeOf(last);
     const box = $("timeline");
     box.textContent = "";
     box.append(h("div", { class: "lane-head" }, `${ROBOT} (robot)`),
@@ -530,8 +528,9 @@
       if (IDLE.has(m.kind)) cls.push("idle");
       if (i === upto) cls.push("current");
       if (i > upto) cls.push("after");
-      const d = h("div", { class: cls.join(" "), "data-step-node": n.id, "data-step-item": path[i], "data-agent": m.agent });
-      d.append(h("span", { class: "n" }, `#${n.id}`), m.action);
+      const d = h("div", { class: cls.join(" "), "data-step-node": n.id, "data-step-item": path[i],
+        ...model.stepHooks(path[i]), "data-agent": m.agent });
+      d.append(h("span", { class: "n" }, model.tag(path[i])), m.action);
       return d;
     };
     // same rule as policy_format.timeline(): a step taken while apart goes to its agent's lane
@@ -557,17 +556,18 @@
     }
     if (path.length === 1) box.appendChild(h("div", { class: "tl-end" }, "the initial state is the goal"));
     else if (leaf.goal) box.appendChild(h("div", { class: "tl-end" }, `goal reached (branch cost ${cost})`));
-    $("branch-select").value = String(leaf.id);
+    $("branch-select").value = model.branchValue(last); // none when the list does not hold it
     $("timeline-note").textContent = upto < path.length - 1
-      ? `Branch through node ${nodeOf(it).id}, continued along first choices to leaf ${leaf.id} (faded).`
-      : `Branch ending at leaf ${leaf.id}.`;
+      ? `Branch through ${model.named(it)}, continued along first choices to leaf ` +
+        `${model.nodeId(leaf)} (faded).`
+      : `Branch ending at leaf ${model.nodeId(leaf)}.`;
   }
 
   // ------------------------------------------------------------------ selection
 
   function select(it, recenter, quiet) {
     if (it === undefined || it === null || !items[it]) return;
-    if (items[it].ref) it = firstItem.get(items[it].node); // a reference leads to the first copy
+    it = drawnAt(it); // a reference leads to the first copy
     let unfolded = false;
     for (const a of ancestors(it)) unfolded = collapsed.delete(a) || unfolded;
     selected = it;
@@ -578,7 +578,7 @@
     showTimeline(it);
     if (quiet) return;
     try {
-      history.replaceState(null, "", `#node=${items[it].node}`);
+      history.replaceState(null, "", `#${model.fragment(it)}`);
     } catch (err) {
       // some browsers refuse history changes on file pages; the selection still works
     }
@@ -587,8 +587,12 @@
   function toggle(it) {
     // keep the toggled node where it was on screen; the layout around it changes
     const before = pos.get(it);
-    if (collapsed.has(it)) collapsed.delete(it);
-    else collapsed.add(it);
+    if (collapsed.has(it)) {
+      kidsOf(it); // made now if they were not (a lazy model makes them each folded)
+      collapsed.delete(it);
+    } else {
+      collapsed.add(it);
+    }
     draw();
     const after = pos.get(it);
     vb.x += after.x - before.x;
@@ -604,7 +608,7 @@
     const t = e.target.closest(".toggle");
     if (t) return toggle(Number(t.getAttribute("data-toggle-item")));
     const g = e.target.closest(".node");
-    if (g) select(Number(g.getAttribute("data-item")), items[Number(g.getAttribute("data-item"))].ref);
+    if (g) select(Number(g.getAttribute("data-item")), Boolean(items[Number(g.getAttribute("data-item"))].ref));
   });
   svg.addEventListener("keydown", (e) => {
     const g = e.target.closest && e.target.closest(".node");
@@ -612,8 +616,8 @@
     const it = Number(g.getAttribute("data-item"));
     if (e.key === "Enter" || e.key === " ") {
       e.preventDefault();
-      select(it, items[it].ref);
-    } else if ((e.key === "+" || e.key === "-") && items[it].kids.length) {
+      select(it, Boolean(items[it].ref));
+    } else if ((e.key === "+" || e.key === "-") && width(it)) {
       toggle(it);
     }
   });
@@ -621,24 +625,70 @@
     const b = e.target.closest && e.target.closest("[data-goto], [data-step-item]");
     if (!b) return;
     if (b.hasAttribute("data-step-item")) select(Number(b.getAttribute("data-step-item")), true);
-    else select(firstItem.get(Number(b.getAttribute("data-goto"))), true);
+    else select(model.find(b.getAttribute("data-goto")), true);
   });
 
   $("zoom-in").addEventListener("click", () => zoom(1 / 1.25));
   $("zoom-out").addEventListener("click", () => zoom(1.25));
   $("fit").addEventListener("click", fit);
   $("expand-all").addEventListener("click", () => {
-    collapsed.clear();
+    // breadth-first while the drawing stays under the model's budget (eager: none; the tree
+    // unfolding of a lifted policy can have more items than a page can draw)
+    let shown = 1;
+    expandNote = "";
+    const queue = [0];
+    for (let q = 0; q < queue.length; q++) {
+      const it = queue[q];
+      if (!width(it)) continue;
+      if (shown + width(it) > model.expandAll) {
+        collapsed.add(it);
+        expandNote = ` (expand all stops at ${count(model.expandAll)}: unfold the rest by hand)`;
+        continue;
+      }
+      collapsed.delete(it);
+      const kids = kidsOf(it);
+      shown += kids.length;
+      queue.push(...kids);
+    }
     draw();
     fit();
   });
   $("collapse-all").addEventListener("click", () => {
-    for (let it = 0; it < items.length; it++) if (items[it].kids.length && items[it].depth >= 1) collapsed.add(it);
+    expandNote = "";
+    for (let it = 0; it < items.length; it++) if (width(it) && items[it].depth >= 1) collapsed.add(it);
     draw();
     fit();
   });
   $("show-timeline").addEventListener("click", () => $("timeline-pane").scrollIntoView());
-  $("branch-select").addEventListener("change", (e) => select(firstItem.get(Number(e.target.value)), true));
+  $("branch-select").addEventListener("change", (e) => select(model.find(e.target.value), true));
+
+  // ------------------------------------------------------------------ the page's model
+
+  // What a model gives (each a function of a tree item ``it`` unless said):
+  //   build()         make the items the page opens with (the root at least): asked once,
+  //                   before anything else
+  //   makeKids(it)    make the item's children (items pushed on ``items``), return their
+  //                   indices; asked once per item whose ``kids`` is null
+  //   first(id)       the item where node ``id`` is drawn first (a reference leads there)
+  //   find(key)       the item a ``data-goto`` key or a branch option names, or null
+  //   key(it)         the ``data-goto`` key of an item
+  //   tag(it)         the item's short name before its label (buttons, timeline steps)
+  //   named(it)       the item's node in a sentence; nodeId(view): a node's id as written
+  //   title(it)       the details' heading (before "— goal reached")
+  //   from(it)        the details' links up: {text, items}, or null
+  //   withWorlds(view)  make sure the view has its divergence and world_diffs
+  //   boxHooks(it), toggleHooks(it), stepHooks(it)  attributes of a box, toggle, step
+  //   below(it)       what a folded box's count says is below it
+  //   shownText(visible)  the toolbar's count of what is drawn
+  //   branchValue(it) the branch option of a leaf item ("" for none)
+  //   fromHash(hash)  the item a URL fragment selects, or null; fragment(it): the reverse
+  //   facts           the header's words for the nodes (before "and N moves")
+  //   expandAll       the most boxes "expand all" draws (Infinity: no budget)
+  //   branches(most)  the branch drop-down's first ``most`` options: [value, text] pairs
+  model = pageModel({
+    policy, nodes, items, collapsed, $, plural, count, label, kidsOf, tellApart,
+  });
+  model.build();
 
   // ------------------------------------------------------------------ start
 
@@ -673,35 +723,33 @@
   $("policy-facts").textContent = [
     `${policy.leaves} branch${policy.leaves === 1 ? "" : "es"}`,
     plural(policy.communications, "communication"), `K = ${policy.K}`,
-    `${plural(nodes.length, "node")} and ${plural(moveCount, "move")}`, `robot ${ROBOT}, human ${HUMAN}`,
+    `${model.facts} and ${plural(moveCount, "move")}`, `robot ${ROBOT}, human ${HUMAN}`,
     policy.optimal === false ? "not proved optimal" : "optimal",
   ].join(" · ");
-  // every communication move of the graph, once, leading to the node it reaches
+  // every communication move of the graph, once, at the first path to the node it is played
+  // at (on a lifted page its images elsewhere say the same with other objects)
   const list = $("comm-list");
   let comms = 0;
-  for (const n of nodes) {
-    for (const m of n.moves) {
-      if (!COMM.has(m.kind)) continue;
-      list.appendChild(gotoButton(m.to, `#${m.to} ${moveLabel(m)}`, m));
+  nodes.forEach((n, i) => {
+    n.moves.forEach((m, j) => {
+      if (!COMM.has(m.kind)) return;
+      list.appendChild(gotoButton(kidsOf(model.first(i))[j]));
       comms++;
-    }
-  }
+    });
+  });
   if (!comms) list.textContent = "none";
-  // distinct leaves, in id order; a leaf is shown on the branch to its first copy
+  // the branch drop-down: the model's first MAX_OPTIONS branches
   const select_ = $("branch-select");
   const MAX_OPTIONS = 2000;
-  let options = 0;
-  for (const n of nodes) {
-    if (n.moves.length || options >= MAX_OPTIONS) continue;
-    select_.appendChild(h("option", { value: n.id }, `leaf #${n.id}: ${label(firstItem.get(n.id))}`));
-    options++;
+  for (const [value, text] of model.branches(MAX_OPTIONS)) {
+    select_.appendChild(h("option", { value }, text));
   }
 
   initialFolding();
   draw();
   openView();
-  const m = /node=(\d+)/.exec(location.hash);
-  if (m && firstItem.has(Number(m[1]))) select(firstItem.get(Number(m[1])), true);
+  const start = model.fromHash(location.hash);
+  if (start !== null && start !== undefined) select(start, true);
   else select(0, false, true); // the root's details and its first branch, the URL untouched
   document.body.setAttribute("data-ready", "true");
-})();
+}
