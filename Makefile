@@ -20,9 +20,9 @@ demo: $(VENV)/.installed
 	@echo
 	@echo "    . $(VENV)/bin/activate"
 
-## Run the whole test suite, slow tests, ruff and mypy included (what CI runs).
+## Run the whole test suite, slow tests, ruff and mypy included (what CI runs), on every core.
 test: $(VENV)/.installed
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n auto
 
 ## The loop while editing: every test not marked slow, on every core (about a minute on two).
 test-fast: $(VENV)/.installed
