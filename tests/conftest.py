@@ -106,6 +106,23 @@ EXAMPLES: tuple[Example, ...] = (
     Example("sally-anne/inform", 15, 1, 4, 1),
 )
 
+# The IPC-2020 HTN track's domains (unified-planning ships them, one problem each) that the
+# report (benchmarks/hddl_report.py) imports, solves and validates, the robot alone: each is
+# solved, validated and walked on every branch by one test, IPC_LIFTED (those with
+# interchangeable objects, written lifted: docs/hddl.md, "Lifted policies") lifted and expanded
+# by tests/test_policy_v3.py, the others by tests/test_every_policy_runs.py. All are slow:
+# seconds each, Childsnack and Minecraft-Player tens of seconds.
+IPC_VALIDATED = ("2020-to-Blocksworld-GTOHP", "2020-to-Factories-simple", "2020-to-Towers",
+                 "2020-po-Satellite", "2020-to-Elevator-Learned-ECAI-16", "2020-to-Robot",
+                 "2020-to-Transport", "2020-po-Transport", "2020-to-Hiking", "2020-to-Snake",
+                 "2020-to-Blocksworld-HPDDL", "2020-to-Multiarm-Blocksworld", "2020-to-Depots",
+                 "2020-to-Minecraft-Regular", "2020-to-Rover-GTOHP",
+                 "2020-to-AssemblyHierarchical", "2020-to-Logistics-Learned-ECAI-16",
+                 "2020-to-Satellite-GTOHP", "2020-po-PCP", "2020-po-Rover",
+                 "2020-to-Childsnack", "2020-to-Minecraft-Player")
+IPC_LIFTED = ("2020-to-Hiking", "2020-to-Minecraft-Regular", "2020-to-Rover-GTOHP",
+              "2020-to-AssemblyHierarchical", "2020-to-Satellite-GTOHP", "2020-to-Childsnack")
+
 # a problem whose search takes seconds and grows past 100 MB (8 cubes, 3 boxes, K=8, without
 # the symmetry reduction, docs/semantics.md §3): far more than the limits tests allow it
 BIG_POINT = ("cubes", 8, 8, 3)  # domain, K, cubes, boxes

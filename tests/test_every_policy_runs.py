@@ -17,7 +17,14 @@ from ehatp.model.problem import Problem
 from ehatp.run.executor import Executor
 from ehatp.run.walk import tick_py_trees, walk_policy
 
-from .conftest import EXAMPLES, Example, every_example_by_branch, solved
+from .conftest import (
+    EXAMPLES,
+    IPC_LIFTED,
+    IPC_VALIDATED,
+    Example,
+    every_example_by_branch,
+    solved,
+)
 from .scenarios import problem as scenario
 from .test_intentions import car_problem, shelf_problem
 
@@ -212,22 +219,12 @@ def test_the_executor_explains_questions_answers_and_announcements() -> None:
     assert "R tells H what it is doing: nothing more (2 -> 1 world)" in lines
 
 
-# -- the imported IPC-2020 domains (tests/test_hddl.py solves and validates them) ---------------
-
-# solved in a few seconds each, the last two in tens of seconds; all are slow for `make test-fast`
-IPC_QUICK = ("2020-to-Blocksworld-GTOHP", "2020-to-Factories-simple", "2020-to-Towers",
-             "2020-po-Satellite", "2020-to-Elevator-Learned-ECAI-16", "2020-to-Robot",
-             "2020-to-Transport", "2020-po-Transport", "2020-to-Hiking", "2020-to-Snake",
-             "2020-to-Blocksworld-HPDDL", "2020-to-Multiarm-Blocksworld", "2020-to-Depots",
-             "2020-to-Minecraft-Regular", "2020-to-Rover-GTOHP", "2020-to-AssemblyHierarchical",
-             "2020-to-Logistics-Learned-ECAI-16", "2020-to-Satellite-GTOHP", "2020-po-PCP",
-             "2020-po-Rover")
-IPC_SLOW = ("2020-to-Childsnack", "2020-to-Minecraft-Player")
+# -- the imported IPC-2020 domains (conftest.IPC_VALIDATED; the lifted ones: test_policy_v3) ---
 
 
 @pytest.mark.slow
 @pytest.mark.filterwarnings("ignore:.*deprecated - use:DeprecationWarning")
-@pytest.mark.parametrize("name", [*IPC_QUICK, *IPC_SLOW])
+@pytest.mark.parametrize("name", [n for n in IPC_VALIDATED if n not in IPC_LIFTED])
 def test_every_imported_ipc_domain_that_validates_walks_to_the_goal(name: str) -> None:
     pytest.importorskip("unified_planning", reason="ehatp[hddl] (unified-planning) not installed")
     from ehatp.experiments import hddl_report
