@@ -211,11 +211,13 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
 
 GC_YOUNG = 100_000
 """The cyclic garbage collector's young-generation threshold while :func:`solve` runs
-(Python's default: 700 container objects allocated). The search allocates hundreds of
-thousands of objects that all live on (the graph's states, worlds, edges), so at the default
-the collector keeps re-scanning them, to free almost nothing: 5-10 % of a solve's time
-(docs/benchmarks.md, "The garbage collector"). At this threshold it still runs, a
-hundredfold less often."""
+(Python's default: 700 container objects allocated). The search pauses the collector
+(:func:`~.andor.search`, the values over the graph included); the phases around it
+(grounding, extracting the policy and building its nodes) allocate hundreds of thousands of
+objects that live on, and at the default the collector re-scans the whole graph again and
+again, to free almost nothing: 3-7 % of a solve at the K=8 points and in the compiled core
+(docs/benchmarks.md, "The garbage collector around the search"). At this threshold it still
+runs, a hundredfold less often."""
 
 
 @contextmanager
