@@ -35,6 +35,11 @@ HOOK = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))[
     "tool"]["hatch"]["build"]["targets"]["wheel"]["hooks"]["mypyc"]
 COMPILED = tuple(sorted(".".join(Path(f).with_suffix("").parts[1:]) for f in HOOK["include"]))
 RANDOM_SEEDS = range(60)  # about 20 of them have a policy
+# Table 1's instances (benchmarks/joint_steps.py), to be solved in joint steps too
+TABLE1 = ("cubes/p1", "cubes/p2", "cubes/p3", "cubes/p4", "cubes/p5", "cubes/p6",
+          "cooking/cooking1", "cooking/cooking2", "cooking/cooking3")
+# joint steps (docs/concurrent.md C4, C8) besides the examples' own: [first, witness]
+JOINT = (("human", "whole"), ("robot", "start"))
 MAX_STATES = 20_000  # as the agreement benchmark: a random problem past it is left out
 
 # One core's answers, in a fresh process: sys.argv[1] goes first on sys.path; the jobs come on
@@ -49,7 +54,13 @@ from ehatp.run.walk import walk_policy
 jobs = json.load(sys.stdin)
 out = {"files": {m: importlib.import_module(m).__file__ for m in jobs["modules"]}, "runs": {}}
 for label, what, symmetry in jobs["runs"]:
-    p = randomgen.problem(what) if isinstance(what, int) else ehatp.load(what)
+    if isinstance(what, list):  # [path, first, witness]: the problem in joint steps
+        import dataclasses
+        from ehatp import StepFirst, StepMode, Steps, Witness
+        p = dataclasses.replace(ehatp.load(what[0]), steps=Steps(
+            StepMode.CONCURRENT, first=StepFirst(what[1]), witness=Witness(what[2])))
+    else:
+        p = randomgen.problem(what) if isinstance(what, int) else ehatp.load(what)
     kw = {} if symmetry is None else {"symmetry": symmetry}
     r = ehatp.solve(p, max_states=jobs["max_states"], timeout=3600, **kw)
     if r.policy is None:
@@ -58,6 +69,54 @@ for label, what, symmetry in jobs["runs"]:
     w = walk_policy(p, r.policy, cap=100_000)
     out["runs"][label] = {"status": r.status, "policy": r.policy.to_json(), "walk_ok": w.ok,
                           "branches": w.branches, "capped": w.capped, "message": w.message}
+print(json.dumps(out))
+"""
+
+# The executor's copies (Executor.copy, which every walk makes at each branch): from each
+# problem's start, every branch of its policy played depth first, a copy taken before each
+# move; the copy must be of the same class, share the problem, the memo tables and the joint
+# steps' settings, hold its own equal copy of what assessment saw, and read the subclass's
+# class attribute; each step's explanation (which reads what assessment saw) is returned.
+COPIES = r"""
+import dataclasses, importlib, json, sys
+sys.path.insert(0, sys.argv[1])
+import ehatp
+from ehatp import StepFirst, StepMode, Steps, Witness
+from ehatp.run.executor import Executor
+jobs = json.load(sys.stdin)
+out = {"file": importlib.import_module("ehatp.epistemic.semantics").__file__, "runs": {}}
+for label, path, steps in jobs:
+    p = ehatp.load(path)
+    if steps:
+        p = dataclasses.replace(p, steps=Steps(StepMode.CONCURRENT, first=StepFirst(steps[0]),
+                                               witness=Witness(steps[1])))
+    start = Executor(p)
+    start.replay_opening()
+    lines, bad, stack = [], [], [start]
+    while stack:
+        ex = stack.pop()
+        if ex.done:
+            lines.append("goal" if ex.goal_reached else "stopped")
+            continue
+        other = ex.copy()
+        a, b = ex.sem, other.sem
+        same = {"class": type(b) is type(a), "grounded": b.grounded is a.grounded,
+                "memo": b._succ is a._succ,
+                "steps": getattr(b, "steps", 0) is getattr(a, "steps", 0),
+                "held": getattr(b, "_held", 0) is getattr(a, "_held", 0),
+                "seen": b.seen == a.seen and b.seen is not a.seen,
+                "passive_carried": b.passive_carried is (not p.steps.concurrent)}
+        bad += [f"{label}: {k}" for k, v in same.items() if not v]
+        action = other.next_robot_action()
+        if action is not None:
+            lines += [f"R {action.label}", *other.explain(other.robot_action_done(action.label))]
+            stack.append(other)
+            continue
+        for move in ex.node.moves:
+            nxt = ex.copy()
+            lines += [f"H {move.action}", *nxt.explain(nxt.observe_human_action(move.action))]
+            stack.append(nxt)
+    out["runs"][label] = {"lines": lines, "bad": bad, "class": type(start.sem).__name__}
 print(json.dumps(out))
 """
 
@@ -207,6 +266,73 @@ def test_the_compiled_core_writes_the_pure_python_policies_byte_for_byte(
             assert run["branches"] >= 1, label
     # every example solves both ways, and about a third of the random problems
     assert solved >= 2 * len(EXAMPLES) + 30, solved
+
+
+def _joint_runs() -> list[tuple[str, Any, bool | None]]:
+    """Joint steps (docs/concurrent.md): Table 1's instances under each setting of
+    :data:`JOINT`, with and without symmetry, and the joint-step examples with the robot
+    deciding first (their own files have the human first)."""
+    runs: list[tuple[str, Any, bool | None]] = []
+    for name in TABLE1:
+        path = str(ROOT / "examples" / f"{name}.toml")
+        runs += [(f"{name} joint {first}/{witness}{flag}", [path, first, witness], symmetry)
+                 for first, witness in JOINT
+                 for flag, symmetry in (("", None), (" --no-symmetry", False))]
+    for e in EXAMPLES:
+        if "concurrent" in e.path.parts:
+            runs.append((f"{e.name} joint robot/whole", [str(e.path), "robot", "whole"], None))
+    return runs
+
+
+def test_the_compiled_core_writes_the_pure_python_policies_in_joint_steps(
+        compiled: Path) -> None:
+    """Joint steps (docs/concurrent.md, C1-C12): ``ConcurrentSemantics``, a Python class,
+    subclasses the compiled ``Semantics``, overriding methods the compiled ones call. On
+    Table 1's instances (human first and whole witnessing; robot first and witnessing at the
+    start), with and without symmetry, and on the stacking examples with the robot first, the
+    compiled core solves each to the pure Python core's status and policy JSON, and each
+    policy executes on every branch. (No joint-step state counts passive moves, so no policy
+    depends on the class attribute ``passive_carried`` it overrides: the copies' test reads
+    it.)"""
+    runs = _joint_runs()
+    fast, pure = _core(compiled, runs), _core(ROOT / "src", runs)
+    assert all(_is_compiled(f) for f in fast["files"].values()), fast["files"]
+    assert fast["runs"].keys() == pure["runs"].keys() == {label for label, _, _ in runs}
+    for label, run in fast["runs"].items():
+        assert run == pure["runs"][label], label
+        assert run["status"] == "solved", (label, run)
+        assert run["walk_ok"] and not run["capped"] and run["branches"] >= 1, (label, run)
+
+
+def test_the_executor_copies_a_compiled_semantics_whole(compiled: Path) -> None:
+    """``Executor.copy`` copies the tracing semantics, a Python subclass of the compiled
+    ``Semantics`` (of ``ConcurrentSemantics`` too in joint steps): compiled, a plain
+    ``copy.copy`` kept only the attributes ``Semantics`` declares and dropped the
+    subclass's (the joint steps' settings, what assessment saw). Played on every branch
+    from a copy at each move, in turns (Sally-Anne, P3, Cooking 1) and in joint steps (two
+    stacking examples, P3 with the robot first), each copy is whole and every step's
+    explanation is the pure Python core's, line for line."""
+    ex = ROOT / "examples"
+    jobs = [("sally-anne", str(ex / "sally-anne/inform.toml"), None),
+            ("p3", str(ex / "cubes/p3.toml"), None),
+            ("cooking1", str(ex / "cooking/cooking1.toml"), None),
+            ("stack4", str(ex / "concurrent/stack4.toml"), None),
+            ("stack-prefs", str(ex / "concurrent/stack-prefs.toml"), None),
+            ("p3 joint robot/start", str(ex / "cubes/p3.toml"), ["robot", "start"])]
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    rows = []
+    for path in (compiled, ROOT / "src"):
+        r = subprocess.run([sys.executable, "-c", COPIES, str(path)], input=json.dumps(jobs),
+                           env=env, capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        rows.append(json.loads(r.stdout.strip().splitlines()[-1]))
+    fast, pure = rows
+    assert _is_compiled(fast["file"]) and not _is_compiled(pure["file"])
+    for label, *_ in jobs:
+        assert fast["runs"][label]["bad"] == [], label
+        assert fast["runs"][label] == pure["runs"][label], label
+        assert "goal" in fast["runs"][label]["lines"], label
+    assert fast["runs"]["stack4"]["class"] == "_TracingJoint"
 
 
 def test_the_compiled_core_solves_ipc_woodworking_as_pure_python_does(compiled: Path) -> None:

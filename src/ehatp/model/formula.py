@@ -11,6 +11,8 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
+from mypy_extensions import mypyc_attr
+
 # --- terms -----------------------------------------------------------------------------------
 
 
@@ -197,6 +199,7 @@ def forall(vars: Var | Sequence[Var], body: Formula) -> Formula:
     return Forall(tuple([vars] if isinstance(vars, Var) else vars), body)
 
 
+@mypyc_attr(allow_interpreted_subclasses=True)  # the DSL's VarTerm, CounterTerm (compiled core)
 class ValueTerm:
     """A state-variable or counter term (``loc(c)``, ``balls(b)``): what ``eq`` compares
     with a value (see :mod:`ehatp.model.domain`)."""
