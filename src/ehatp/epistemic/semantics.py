@@ -504,8 +504,8 @@ class Semantics:
         worlds, k = es.worlds, es.k
         if not cop and k < self.K:  # unseen, the wait is one of the events the human imagines
             worlds, k = self.assess(es.true, self.product(worlds)), k + 1
-        return es._replace(turn=HUMAN, worlds=worlds, k=k, passive=es.passive + 1,
-                           forced=forced)
+        return EState(HUMAN, es.true, es.robot_agenda, es.human_agendas, worlds, k,  # hot:
+                      es.passive + 1, forced, es.opening, es.answering, es.pending)  # no _replace
 
     def human_options(self, es: EState, h: Agenda) -> tuple[
             list[tuple[int, Agenda]], dict[str, Formula], bool, bool]:
@@ -573,9 +573,9 @@ class Semantics:
             out.append(Move(HUMAN, ASK, f"ask({label})", self.costs.ask,
                             self.ask(es, phi)._replace(human_agendas=_hypotheses(hs))))
         if passers:
-            out.append(Move(HUMAN, PASS, "pass", self.costs.pass_,
-                            es._replace(turn=ROBOT, passive=es.passive + 1, forced=False,
-                                        human_agendas=_hypotheses(passers)), waits=waits))
+            out.append(Move(HUMAN, PASS, "pass", self.costs.pass_, EState(  # no _replace: hot
+                ROBOT, es.true, es.robot_agenda, _hypotheses(passers), es.worlds, es.k,
+                es.passive + 1, False, es.opening, es.answering, es.pending), waits=waits))
         return out
 
     def human_exec(self, es: EState, op: GOp, rests: tuple[Agenda, ...]) -> Move:
