@@ -120,6 +120,36 @@ for label, path, steps in jobs:
 print(json.dumps(out))
 """
 
+# Pickling and deep copies: each kind of formula, and whole problems (which hold formulas),
+# pickled and deep-copied; each problem's copies solved to its policy JSON.
+PICKLES = r"""
+import copy, hashlib, importlib, json, pickle, sys
+sys.path.insert(0, sys.argv[1])
+import ehatp
+from ehatp.experiments import randomgen
+from ehatp.model.formula import (FALSE, TRUE, And, Atom, Cmp, Eq, Exists, Forall, GAtom,
+                                 GTest, Is, Not, Or, Var)
+jobs = json.load(sys.stdin)
+out = {"file": importlib.import_module("ehatp.model.formula").__file__, "formulas": [],
+       "problems": {}}
+x, c = Var("x", "cube"), "c1"
+for f in (x, Atom("on", (x, c)), Is("loc", (x, "mt")), Eq(x, c), Cmp("balls", (c,), ">=", 2),
+          Not(Atom("p", ())), And((Atom("p", ()), GAtom(3, "q"))), Or((TRUE, FALSE)),
+          Exists((x,), Atom("on", (x, c))), Forall((x,), GTest(GAtom(1, "a"), "a"))):
+    p, d = pickle.loads(pickle.dumps(f)), copy.deepcopy(f)
+    out["formulas"].append([str(f), type(p) is type(f) and p == f,
+                            type(d) is type(f) and d == f])
+for label, what in jobs:
+    p = randomgen.problem(what) if isinstance(what, int) else ehatp.load(what)
+    row = []
+    for q in (p, pickle.loads(pickle.dumps(p)), copy.deepcopy(p)):
+        r = ehatp.solve(q)
+        text = r.policy.to_json() if r.policy is not None else r.status
+        row.append(hashlib.sha256(text.encode()).hexdigest())
+    out["problems"][label] = row
+print(json.dumps(out))
+"""
+
 WOODWORKING = r"""
 import hashlib, json, sys
 sys.path.insert(0, sys.argv[1])
@@ -333,6 +363,31 @@ def test_the_executor_copies_a_compiled_semantics_whole(compiled: Path) -> None:
         assert fast["runs"][label] == pure["runs"][label], label
         assert "goal" in fast["runs"][label]["lines"], label
     assert fast["runs"]["stack4"]["class"] == "_TracingJoint"
+
+
+def test_formulas_and_problems_pickle_and_copy_with_the_compiled_core(compiled: Path) -> None:
+    """The formulas are frozen dataclasses; compiled, pickle and ``copy.deepcopy`` rebuilt one
+    by assigning its fields after creating it, which a frozen class refuses
+    (``FrozenInstanceError``), so a problem (which holds its domain's formulas) could not be
+    pickled. Each kind of formula comes back equal and of its class, and each problem
+    pickled or deep-copied solves to the original's policy JSON, as in pure Python."""
+    ex = ROOT / "examples"
+    jobs = [("p3", str(ex / "cubes/p3.toml")), ("cooking1", str(ex / "cooking/cooking1.toml")),
+            ("stack4", str(ex / "concurrent/stack4.toml")), *[(f"random {s}", s) for s in range(4)]]
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    rows = []
+    for path in (compiled, ROOT / "src"):
+        r = subprocess.run([sys.executable, "-c", PICKLES, str(path)], input=json.dumps(jobs),
+                           env=env, capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        rows.append(json.loads(r.stdout.strip().splitlines()[-1]))
+    fast, pure = rows
+    assert _is_compiled(fast.pop("file")) and not _is_compiled(pure.pop("file"))
+    assert fast == pure
+    assert len(fast["formulas"]) == 10 and all(p and d for _, p, d in fast["formulas"]), fast
+    assert fast["problems"].keys() == {label for label, _ in jobs}
+    for label, (original, pickled, copied) in fast["problems"].items():
+        assert original == pickled == copied, label
 
 
 def test_the_compiled_core_solves_ipc_woodworking_as_pure_python_does(compiled: Path) -> None:
