@@ -2,7 +2,7 @@
 VENV ?= .venv
 BIN := $(VENV)/bin
 
-.PHONY: demo test test-fast lint bench system-deps clean
+.PHONY: demo test test-fast lint bench system-deps clean clean-compiled
 
 $(VENV)/.installed: pyproject.toml
 	python3 -m venv $(VENV)
@@ -47,5 +47,9 @@ bt-cpp:
 system-deps:
 	apt-get update -qq && apt-get install -y -qq graphviz chromium chromium-driver
 
-clean:
+## Remove the compiled modules a compiled build (docs/compiled.md) left beside the sources in src.
+clean-compiled:
+	find src \( -name '*.so' -o -name '*.pyd' \) -delete
+
+clean: clean-compiled
 	rm -rf $(VENV) p2.policy.json .pytest_cache .mypy_cache .ruff_cache .hypothesis

@@ -1,7 +1,7 @@
 """Where symmetry does not help (issue 17 §4): two checkouts side by side, run by run.
 
-    .venv/bin/python benchmarks/speed_core.py --versus DIR [--repeat N] [--only NAME ...]
-        [--validate] [--keep DIR]
+    .venv/bin/python benchmarks/speed_core.py --versus DIR [--after PATH] [--repeat N]
+        [--only NAME ...] [--validate] [--keep DIR]
 
 Targets: ``cubes-c8-b2-opaque-k2`` and ``cubes-c6-b3-opaque-k8`` solved with ``--no-symmetry``,
 and the IPC 2020 HTN track's ``to-Woodworking`` (HDDL, the robot alone, as
@@ -9,7 +9,9 @@ and the IPC 2020 HTN track's ``to-Woodworking`` (HDDL, the robot alone, as
 (``python -c``, the checkout's ``src`` first on ``sys.path``): import, ground, solve, write the
 policy JSON, and with ``--validate`` validate it too. ``DIR`` (another checkout, e.g. a ``git
 worktree`` of an older commit) and this one alternate run by run, so that a shared machine's
-drift falls on both alike.
+drift falls on both alike. ``--after PATH`` times ``PATH`` (a directory that holds the
+``ehatp`` package, such as the compiled core installed with ``pip install --no-deps --target
+PATH``, docs/compiled.md) instead of this checkout's ``src``; the row says which core ran.
 
 Prints, per target and checkout, the medians of the whole process's CPU time (user + system,
 start-up included) and its peak resident memory (``ru_maxrss`` of the child), the states,
@@ -53,6 +55,7 @@ else:
         f.write(point.toml())
     problem = ehatp.load(path)
     kw = {"symmetry": False}
+from ehatp.search import andor
 from ehatp.search.planner import solve
 r = solve(problem, timeout=3600, **kw)
 text = r.policy.to_json() if r.policy is not None else ""
@@ -62,7 +65,9 @@ ok = None
 if validate and r.policy is not None:
     from ehatp.check.validator import validate as check
     ok = check(problem, r.policy).ok
-print(json.dumps({"status": r.status, "distinct": r.stats.get("distinct"),
+from importlib.machinery import EXTENSION_SUFFIXES
+core = "compiled" if andor.__file__.endswith(tuple(EXTENSION_SUFFIXES)) else "pure"
+print(json.dumps({"core": core, "status": r.status, "distinct": r.stats.get("distinct"),
                   "cost": None if r.policy is None else str(r.policy.cost), "valid": ok}))
 """
 
@@ -97,6 +102,9 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--versus", required=True, metavar="DIR",
                     help="the other checkout (its src/ is timed)")
+    ap.add_argument("--after", metavar="PATH",
+                    help="time PATH (holding the ehatp package, e.g. the compiled core "
+                         "installed with pip --target) instead of this checkout's src")
     ap.add_argument("--repeat", "-n", type=int, default=3, metavar="N",
                     help="runs per target and checkout; medians (default 3)")
     ap.add_argument("--only", action="append", choices=sorted(TARGETS), metavar="NAME",
@@ -104,11 +112,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--validate", action="store_true", help="validate each policy too")
     ap.add_argument("--keep", type=Path, metavar="DIR", help="write the policies there")
     args = ap.parse_args(argv)
-    srcs = {"before": str(Path(args.versus).resolve() / "src"), "after": str(ROOT / "src")}
+    srcs = {"before": str(Path(args.versus).resolve() / "src"),
+            "after": str(Path(args.after).resolve() if args.after else ROOT / "src")}
     keep = args.keep or Path(tempfile.mkdtemp(prefix="speed-core-"))
     keep.mkdir(parents=True, exist_ok=True)
     print("target                                    | checkout | CPU s (runs)        | "
-          "peak MB | states  | cost | valid")
+          "peak MB | states  | cost | valid | core")
     same = True
     for target in args.only or list(TARGETS):
         rows: dict[str, list[dict[str, Any]]] = {"before": [], "after": []}
@@ -121,7 +130,8 @@ def main(argv: list[str] | None = None) -> int:
             runs = " ".join(f"{r['cpu_s']:.2f}" for r in rs)
             print(f"{TARGETS[target][:41]:41s} | {label:8s} | {cpu[label]:6.2f} ({runs}) | "
                   f"{statistics.median(r['peak_mb'] for r in rs):7.0f} | "
-                  f"{rs[-1]['distinct']:7,} | {rs[-1]['cost']:>4} | {rs[-1]['valid']}")
+                  f"{rs[-1]['distinct']:7,} | {rs[-1]['cost']:>4} | {rs[-1]['valid']} | "
+                  f"{rs[-1]['core']}")
         hashes = {r["sha256"] for rs in rows.values() for r in rs}
         policies = {r["sha256_policy"] for rs in rows.values() for r in rs}
         same = same and len(policies) == 1

@@ -116,9 +116,37 @@ app = typer.Typer(
 )
 
 
+def compiled_modules() -> list[str]:
+    """The modules of ehatp that run compiled (docs/compiled.md): those with an extension
+    module (``andor.cpython-311-x86_64-linux-gnu.so``) beside their source, which Python
+    imports in its place. Empty for the pure Python core (``pip install .``)."""
+    from importlib.machinery import EXTENSION_SUFFIXES
+    from pathlib import Path
+
+    import ehatp
+
+    root = Path(ehatp.__file__).parent
+    out = set()
+    for f in root.rglob("*"):
+        # the longest suffix first: "andor.cpython-311-x86_64-linux-gnu.so" before ".so"
+        suffix = next((s for s in EXTENSION_SUFFIXES if f.name.endswith(s)), None)
+        if suffix is not None:
+            out.add(".".join(("ehatp", *f.relative_to(root).parent.parts,
+                              f.name[:-len(suffix)])))
+    return sorted(out)
+
+
 def _version(value: bool) -> None:
     if value:
-        typer.echo(f"ehatp {__version__}")
+        n = len(compiled_modules())
+        typer.echo(f"ehatp {__version__}" + (f" (compiled core: {n} modules)" if n else ""))
+        raise typer.Exit()
+
+
+def _core(value: bool) -> None:
+    if value:
+        mods = compiled_modules()
+        typer.echo("\n".join(["compiled core:", *mods]) if mods else "pure Python core")
         raise typer.Exit()
 
 
@@ -126,7 +154,12 @@ def _version(value: bool) -> None:
 def _root(
     version: Annotated[bool, typer.Option(
         "--version", callback=_version, is_eager=True,
-        help="Print the version and exit.")] = False,
+        help="Print the version and exit (it says \"compiled core\" when ehatp was installed "
+             "with its compiled core, docs/compiled.md).")] = False,
+    core: Annotated[bool, typer.Option(
+        "--core", callback=_core, is_eager=True,
+        help="Print which core runs, \"pure Python core\" or \"compiled core:\" and the "
+             "modules compiled, and exit.")] = False,
     debug: Annotated[bool, typer.Option(
         "--debug", help="On an internal error, print the traceback instead of writing it to "
                         "a file.")] = False,

@@ -12,7 +12,9 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from itertools import combinations
-from typing import NamedTuple
+from typing import Any, ClassVar, NamedTuple, cast
+
+from mypy_extensions import mypyc_attr
 
 from ..model.agenda import Agenda, Networks
 from ..model.formula import And, Formula, conj, ground_atoms
@@ -33,8 +35,7 @@ NOT_DONE = -4  # what a world whose robot agenda is blocked lets the human expec
 ASK_INTENTION = "ask(intention)"
 DEAD_PASSIVE_RUN = 3
 PRODUCT_CACHE = 1 << 20
-"""How many worlds the products :meth:`Semantics.product` remembers hold before it starts
-afresh."""
+"""How many worlds the products :meth:`Semantics.product` remembers hold, then afresh."""
 PASSIVE_CARRIED = {WAIT: 1, PASS: 1, SILENCE: 0, ANSWER: 0}
 """§3-§5 (turn-taking): how a move's child counts consecutive passive moves from its parent's
 count ``p``: ``p + 1`` after ``wait`` or ``pass`` (said with an ``inform`` too), ``p`` after the
@@ -76,10 +77,11 @@ def bits_of(mask: int) -> list[int]:
     return list(bits(mask))
 
 
+@mypyc_attr(allow_interpreted_subclasses=True)  # Python subclasses it (docs/compiled.md)
 class Semantics:
     """The transition rules (docs/semantics.md §2-§6) over one ground problem."""
 
-    passive_carried = True
+    passive_carried: ClassVar[bool] = True
     """Whether the moves follow :data:`PASSIVE_CARRIED` (turn-taking: they do)."""
 
     def __init__(self, grounded: Grounded) -> None:
@@ -107,6 +109,15 @@ class Semantics:
         self._seen_ops: dict[int, GOp] = {}
         self._inform: dict[tuple[int, Agenda, tuple[Agenda, ...], Worlds], tuple[int, ...]] = {}
         self.check: Callable[[], None] = no_check
+
+    def __copy__(self) -> Semantics:
+        """Every attribute shared, a Python subclass's too (``Executor.copy``; compiled, the
+        default copy would drop those: docs/compiled.md)."""
+        other = type(self).__new__(type(self))
+        state = cast("dict[str, Any]", self.__getstate__() or {})  # compiled: Semantics's own
+        for name, value in (state | getattr(self, "__dict__", {})).items():
+            setattr(other, name, value)
+        return other
 
     @property
     def g(self) -> Grounded:
@@ -196,9 +207,8 @@ class Semantics:
 
     # -- basics ---------------------------------------------------------------------------
     def initial(self) -> EState:
-        """§3-§5: the root: the designated world, the belief worlds after situation assessment (with
-        the robot agendas the human can hold), and, under speech "with-action", the robot's speech
-        opening."""
+        """§3-§5: the root: the designated world, the belief worlds after situation assessment
+        (with the robot agendas the human can hold), under speech "with-action" an opening."""
         grounded = self.grounded
         turn = HUMAN if grounded.problem.starts == "human" else ROBOT
         init = grounded.init
@@ -494,8 +504,8 @@ class Semantics:
         worlds, k = es.worlds, es.k
         if not cop and k < self.K:  # unseen, the wait is one of the events the human imagines
             worlds, k = self.assess(es.true, self.product(worlds)), k + 1
-        return es._replace(turn=HUMAN, worlds=worlds, k=k, passive=es.passive + 1,
-                           forced=forced)
+        return EState(HUMAN, es.true, es.robot_agenda, es.human_agendas, worlds, k,  # hot:
+                      es.passive + 1, forced, es.opening, es.answering, es.pending)  # no _replace
 
     def human_options(self, es: EState, h: Agenda) -> tuple[
             list[tuple[int, Agenda]], dict[str, Formula], bool, bool]:
@@ -563,9 +573,9 @@ class Semantics:
             out.append(Move(HUMAN, ASK, f"ask({label})", self.costs.ask,
                             self.ask(es, phi)._replace(human_agendas=_hypotheses(hs))))
         if passers:
-            out.append(Move(HUMAN, PASS, "pass", self.costs.pass_,
-                            es._replace(turn=ROBOT, passive=es.passive + 1, forced=False,
-                                        human_agendas=_hypotheses(passers)), waits=waits))
+            out.append(Move(HUMAN, PASS, "pass", self.costs.pass_, EState(  # no _replace: hot
+                ROBOT, es.true, es.robot_agenda, _hypotheses(passers), es.worlds, es.k,
+                es.passive + 1, False, es.opening, es.answering, es.pending), waits=waits))
         return out
 
     def human_exec(self, es: EState, op: GOp, rests: tuple[Agenda, ...]) -> Move:

@@ -22,6 +22,8 @@ Worlds = tuple[World, ...]
 
 
 class EState(NamedTuple):
+    # Semantics.robot_wait and the human's pass build one field by field (hot): a new
+    # field is to be passed there too
     turn: Agent  # whose move it is (§4)
     true: int
     robot_agenda: Agenda

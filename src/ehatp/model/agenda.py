@@ -14,9 +14,14 @@ from collections.abc import Callable, Iterable, Sequence
 from itertools import permutations, product
 from math import factorial
 
+from mypy_extensions import mypyc_attr
+
 from .grounded import FINISH, bits
 
 
+# a Python class even where this module is compiled (docs/compiled.md): mypyc compiles no
+# subclass of tuple
+@mypyc_attr(native_class=False)
 class Block(tuple[tuple[int, int], ...]):
     """A partially ordered part of an agenda (docs/semantics.md §1, "Partial order").
 

@@ -9,9 +9,19 @@ once into a closure over an integer bitset state.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
+from typing import Any
+
+from mypy_extensions import mypyc_attr
 
 # --- terms -----------------------------------------------------------------------------------
+
+
+def _reduce(x: Any) -> tuple[type, tuple[Any, ...]]:
+    """How a frozen dataclass here pickles and copies: its class called with its fields. (The
+    compiled core's default would assign each field after creating the object, which a
+    frozen class refuses: docs/compiled.md.)"""
+    return type(x), tuple(getattr(x, f.name) for f in fields(x))
 
 
 @dataclass(frozen=True, slots=True)
@@ -23,6 +33,9 @@ class Var:
 
     def __str__(self) -> str:
         return f"?{self.name}"
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return _reduce(self)
 
 
 Term = Var | str  # a str is an object name (constant)
@@ -39,6 +52,9 @@ class Formula:
     """Base class; subclasses are frozen dataclasses."""
 
     __slots__ = ()
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return _reduce(self)
 
     def __and__(self, other: Formula) -> Formula:
         return conj(self, other)
@@ -197,6 +213,7 @@ def forall(vars: Var | Sequence[Var], body: Formula) -> Formula:
     return Forall(tuple([vars] if isinstance(vars, Var) else vars), body)
 
 
+@mypyc_attr(allow_interpreted_subclasses=True)  # the DSL's VarTerm, CounterTerm (compiled core)
 class ValueTerm:
     """A state-variable or counter term (``loc(c)``, ``balls(b)``): what ``eq`` compares
     with a value (see :mod:`ehatp.model.domain`)."""

@@ -6,7 +6,7 @@ Built by :func:`~ehatp.model.grounding.ground_problem`; data and lookups only.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, MutableMapping
 from dataclasses import dataclass, field
 
 from .formula import Formula, StateFn, compile_ground
@@ -62,9 +62,12 @@ class GModel:
     """A ground agent model: task id -> primitive action or (done condition, methods)."""
 
     agent: str
-    ops: dict[int, GOp] = field(default_factory=dict)
-    methods: dict[int, tuple[GMethod, ...]] = field(default_factory=dict)
-    done: dict[int, tuple[Formula, StateFn]] = field(default_factory=dict)
+    # MutableMapping, not dict: grounded on demand they are ``_OnDemand`` dicts
+    # (model/grounding.py) whose get/[]/in ground a task first, and code compiled with mypyc
+    # (docs/compiled.md) reads a field typed dict through the C dict API, past those overrides
+    ops: MutableMapping[int, GOp] = field(default_factory=dict)
+    methods: MutableMapping[int, tuple[GMethod, ...]] = field(default_factory=dict)
+    done: MutableMapping[int, tuple[Formula, StateFn]] = field(default_factory=dict)
     # grounded on demand: a task reached but not yet grounded is grounded when one of the
     # three tables is first asked about it; the tables then hold only what was asked for
     lazy: bool = False

@@ -536,7 +536,7 @@ class _OnDemand(dict[int, _V]):
 
     __slots__ = ("_pending", "_ground")
 
-    def __init__(self, data: dict[int, _V], pending: set[int],
+    def __init__(self, data: Mapping[int, _V], pending: set[int],
                  ground: Callable[[int], None]) -> None:
         super().__init__(data)
         self._pending, self._ground = pending, ground
@@ -670,21 +670,21 @@ class _ModelGrounding:
             done_f = gr.ground_f(op.done, b) if op.done is not None else None
             # C11: the metrics counting it, each condition compiled once (false: left out)
             counts = [(m.name, gr.ground_f(m.when, b)) for m in gr.d.metrics_of(self.who, name)]
-            dict.__setitem__(g.ops, t, GOp(
+            g.ops[t] = GOp(
                 t, gr.task_names[t], name, args, pre_f, gr.compile(pre_f), add, dele,
                 tuple(cond), cost, done_f, gr.compile(done_f) if done_f is not None else None,
-                tuple((n, gr.compile(f)) for n, f in counts if f != FALSE)))
+                tuple((n, gr.compile(f)) for n, f in counts if f != FALSE))
             return
         task = model.tasks.get(name)
         if task is None and self.estimate:
-            dict.__setitem__(g.methods, t, ())
+            g.methods[t] = ()
             return
         if task is None:
             raise DomainError(f"{model.agent} has no task or action {name!r}")
         tb = dict(zip(task.params, args, strict=True))
         if task.done is not None:
             df = gr.ground_f(task.done, tb)
-            dict.__setitem__(g.done, t, (df, gr.compile(df)))
+            g.done[t] = (df, gr.compile(df))
         gms = []
         for method in self.methods_of.get(name, []):
             for vals in self.bindings(method, tb):
@@ -702,7 +702,7 @@ class _ModelGrounding:
                 label = f"{method.name}({', '.join(vals)})" if vals else method.name
                 gms.append(GMethod(f"{name}.{label}", pre_f, gr.compile(pre_f),
                                    tuple(subs), method.predecessors()))
-        dict.__setitem__(g.methods, t, tuple(gms))
+        g.methods[t] = tuple(gms)
 
 
 _Gen = tuple[str, tuple[int, ...], tuple[int, ...], tuple[Term, ...]]

@@ -17,6 +17,8 @@ from __future__ import annotations
 from bisect import bisect_left, bisect_right
 from collections.abc import Callable
 
+from mypy_extensions import mypyc_attr
+
 from ..errors import DomainError
 from .agenda import Agenda, Block, Item, Networks
 from .formula import FALSE, Formula, StateFn, negate
@@ -500,6 +502,9 @@ def _first(o: Option) -> int:
     return o[0]
 
 
+# a Python class even where this module is compiled (docs/compiled.md): mypyc compiles no
+# subclass of tuple
+@mypyc_attr(native_class=False)
 class Uncertain(tuple[int, Agenda, int, tuple[Formula, ...]]):
     """(op, rest, worlds mask, uncertain conditions) as a light named tuple."""
 
