@@ -43,9 +43,10 @@ bench: $(VENV)/.installed
 bt-cpp:
 	python3 benchmarks/bt_cpp.py
 
-## Debian packages some tests use (Graphviz for SVG, Chromium for the explorer test); needs root.
+## Debian packages some tests use (Graphviz for SVG, Chromium for the explorer, a C compiler and
+## Python's headers for the compiled core's build); needs root.
 system-deps:
-	apt-get update -qq && apt-get install -y -qq graphviz chromium chromium-driver
+	apt-get update -qq && apt-get install -y -qq graphviz chromium chromium-driver build-essential python3-dev
 
 ## Remove the compiled modules a compiled build (docs/compiled.md) left beside the sources in src.
 clean-compiled:
