@@ -4,14 +4,15 @@
         [--only NAME ...] [--validate] [--keep DIR]
 
 Targets: ``cubes-c8-b2-opaque-k2`` and ``cubes-c6-b3-opaque-k8`` solved with ``--no-symmetry``,
-and the IPC 2020 HTN track's ``to-Woodworking`` (HDDL, the robot alone, as
-``benchmarks/hddl_report.py`` imports it; needs unified-planning). Every run is a fresh process
-(``python -c``, the checkout's ``src`` first on ``sys.path``): import, ground, solve, write the
-policy JSON, and with ``--validate`` validate it too. ``DIR`` (another checkout, e.g. a ``git
-worktree`` of an older commit) and this one alternate run by run, so that a shared machine's
-drift falls on both alike. ``--after PATH`` times ``PATH`` (a directory that holds the
-``ehatp`` package, such as the compiled core installed with ``pip install --no-deps --target
-PATH``, docs/compiled.md) instead of this checkout's ``src``; the row says which core ran.
+and the IPC 2020 HTN track's two largest, ``to-Woodworking`` and ``to-Entertainment`` (HDDL, the
+robot alone, as ``benchmarks/hddl_report.py`` imports them; needs unified-planning). Every run
+is a fresh process (``python -c``, the checkout's ``src`` first on ``sys.path``): import,
+ground, solve, write the policy JSON, and with ``--validate`` validate it too. ``DIR`` (another
+checkout, e.g. a ``git worktree`` of an older commit) and this one alternate run by run, so that
+a shared machine's drift falls on both alike. ``--after PATH`` times ``PATH`` (a directory that
+holds the ``ehatp`` package, such as the compiled core installed with ``pip install --no-deps
+--target PATH``, docs/compiled.md) instead of this checkout's ``src``; the row says which core
+ran.
 
 Prints, per target and checkout, the medians of the whole process's CPU time (user + system,
 start-up included) and its peak resident memory (``ru_maxrss`` of the child), the states,
@@ -39,11 +40,12 @@ CHILD = r"""
 import json, sys
 sys.path.insert(0, sys.argv[1])
 target, out, validate = sys.argv[2], sys.argv[3], sys.argv[4] == "1"
-if target == "woodworking":
+if target in ("woodworking", "entertainment"):
     from ehatp.experiments.hddl_report import domains_shipped
     from ehatp.formats.hddl import import_hddl
     from ehatp.formats.hddl_sidecar import Sidecar
-    _, dom, prob = next(d for d in domains_shipped() if d[0].endswith("to-Woodworking"))
+    ipc = "to-" + target.capitalize()
+    _, dom, prob = next(d for d in domains_shipped() if d[0].endswith(ipc))
     problem = import_hddl(dom, prob, sidecar=Sidecar(expects="nothing")).problem()
     kw = {}
 else:
@@ -73,7 +75,8 @@ print(json.dumps({"core": core, "status": r.status, "distinct": r.stats.get("dis
 
 TARGETS = {"cubes-c8-b2-opaque-k2": "cubes-c8-b2-opaque-k2 --no-symmetry",
            "cubes-c6-b3-opaque-k8": "cubes-c6-b3-opaque-k8 --no-symmetry",
-           "woodworking": "IPC 2020 to-Woodworking, the robot alone"}
+           "woodworking": "IPC 2020 to-Woodworking, the robot alone",
+           "entertainment": "IPC 2020 to-Entertainment, the robot alone"}
 
 
 def run(src: str, target: str, out: Path, validate: bool) -> dict[str, Any]:
