@@ -239,16 +239,29 @@ def test_a_plain_build_stays_pure_python_beside_a_compiled_one(compiled: Path) -
     assert not [n for n in names if n.endswith((".so", ".pyd"))], names
 
 
-def _core(path: Path, runs: list[tuple[str, Any, bool | None]]) -> dict[str, Any]:
-    """Run ``runs`` (label, an example's path or a random seed, symmetry) in a fresh process
-    whose ``sys.path`` starts with ``path``; its answers."""
-    jobs = {"modules": list(COMPILED), "runs": runs, "max_states": MAX_STATES}
+def _script(code: str, path: Path, jobs: Any = None) -> dict[str, Any]:
+    """Run ``code`` in a fresh process whose ``sys.path`` starts with ``path`` (its first
+    argument), ``jobs`` as JSON on its standard input; the JSON its last line prints."""
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    r = subprocess.run([sys.executable, "-c", CHILD, str(path)], input=json.dumps(jobs),
+    r = subprocess.run([sys.executable, "-c", code, str(path)],
+                       input=None if jobs is None else json.dumps(jobs),
                        env=env, capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     out: dict[str, Any] = json.loads(r.stdout.strip().splitlines()[-1])
     return out
+
+
+def _both(code: str, compiled: Path, jobs: Any = None) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Return what ``code`` (:func:`_script`) answers with the compiled core, then with the
+    pure Python core of this checkout."""
+    return _script(code, compiled, jobs), _script(code, ROOT / "src", jobs)
+
+
+def _core(path: Path, runs: list[tuple[str, Any, bool | None]]) -> dict[str, Any]:
+    """Run ``runs`` (label, an example's path or a random seed, symmetry) in a fresh process
+    whose ``sys.path`` starts with ``path``; its answers."""
+    return _script(CHILD, path, {"modules": list(COMPILED), "runs": runs,
+                                 "max_states": MAX_STATES})
 
 
 def _is_compiled(file: str) -> bool:
@@ -349,14 +362,7 @@ def test_the_executor_copies_a_compiled_semantics_whole(compiled: Path) -> None:
             ("stack4", str(ex / "concurrent/stack4.toml"), None),
             ("stack-prefs", str(ex / "concurrent/stack-prefs.toml"), None),
             ("p3 joint robot/start", str(ex / "cubes/p3.toml"), ["robot", "start"])]
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    rows = []
-    for path in (compiled, ROOT / "src"):
-        r = subprocess.run([sys.executable, "-c", COPIES, str(path)], input=json.dumps(jobs),
-                           env=env, capture_output=True, text=True)
-        assert r.returncode == 0, r.stderr
-        rows.append(json.loads(r.stdout.strip().splitlines()[-1]))
-    fast, pure = rows
+    fast, pure = _both(COPIES, compiled, jobs)
     assert _is_compiled(fast["file"]) and not _is_compiled(pure["file"])
     for label, *_ in jobs:
         assert fast["runs"][label]["bad"] == [], label
@@ -374,14 +380,7 @@ def test_formulas_and_problems_pickle_and_copy_with_the_compiled_core(compiled: 
     ex = ROOT / "examples"
     jobs = [("p3", str(ex / "cubes/p3.toml")), ("cooking1", str(ex / "cooking/cooking1.toml")),
             ("stack4", str(ex / "concurrent/stack4.toml")), *[(f"random {s}", s) for s in range(4)]]
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    rows = []
-    for path in (compiled, ROOT / "src"):
-        r = subprocess.run([sys.executable, "-c", PICKLES, str(path)], input=json.dumps(jobs),
-                           env=env, capture_output=True, text=True)
-        assert r.returncode == 0, r.stderr
-        rows.append(json.loads(r.stdout.strip().splitlines()[-1]))
-    fast, pure = rows
+    fast, pure = _both(PICKLES, compiled, jobs)
     assert _is_compiled(fast.pop("file")) and not _is_compiled(pure.pop("file"))
     assert fast == pure
     assert len(fast["formulas"]) == 10 and all(p and d for _, p, d in fast["formulas"]), fast
@@ -396,14 +395,7 @@ def test_the_compiled_core_solves_ipc_woodworking_as_pure_python_does(compiled: 
     unsolvable after 116,644 states (docs/compiled.md). Both cores must find the same policy
     (cost 13 over 222,123 states, docs/benchmarks.md)."""
     pytest.importorskip("unified_planning", reason="ehatp[hddl] (unified-planning) not installed")
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    rows = []
-    for path in (compiled, ROOT / "src"):
-        r = subprocess.run([sys.executable, "-c", WOODWORKING, str(path)], env=env,
-                           capture_output=True, text=True)
-        assert r.returncode == 0, r.stderr
-        rows.append(json.loads(r.stdout.strip().splitlines()[-1]))
-    fast, pure = rows
+    fast, pure = _both(WOODWORKING, compiled)
     assert _is_compiled(fast.pop("andor")) and not _is_compiled(pure.pop("andor"))
     assert fast == pure
     assert fast["status"] == "solved" and fast["cost"] == "13", fast
