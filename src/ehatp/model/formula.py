@@ -391,6 +391,30 @@ def simplify_or(parts: Iterable[Formula]) -> Formula:
     return next(iter(out)) if len(out) == 1 else Or(tuple(out))
 
 
+def value_in(digits: Sequence[Formula], allowed: set[int], top: int) -> Formula:
+    """Return a formula over a counter's ``digits`` (its atoms, lowest bit first) that holds
+    when its value is in ``allowed``; values above ``top`` never occur, so they may go either
+    way (Shannon expansion from the highest bit, whole halves decided at once)."""
+    def go(j: int, base: int) -> Formula | None:  # values base .. base + 2**(j+1) - 1
+        vals = [v for v in range(base, base + (2 << j if j >= 0 else 1)) if v <= top]
+        if not vals:
+            return None
+        inside = [v in allowed for v in vals]
+        if all(inside):
+            return TRUE
+        if not any(inside):
+            return FALSE
+        low, high = go(j - 1, base), go(j - 1, base + (1 << j))
+        if high is None or high == low:
+            return low
+        assert low is not None
+        b = digits[j]
+        return simplify_or([simplify_and([b, high]), simplify_and([negate(b), low])])
+
+    out = go(len(digits) - 1, 0)
+    return FALSE if out is None else out
+
+
 def ground_atoms(f: Formula) -> set[int]:
     """Indices of the fluent atoms a ground formula mentions."""
     if isinstance(f, GAtom):
