@@ -15,6 +15,7 @@ import ehatp
 from ehatp.epistemic.state import HUMAN, ROBOT
 from ehatp.experiments import randomgen
 from ehatp.model.grounding import ground_problem
+from ehatp.search import andor
 from ehatp.search import bounds as bounds_module
 from ehatp.search.andor import search
 from ehatp.search.bounds import INF, Bounds
@@ -28,6 +29,7 @@ from .conftest import (
     random_policies_agree,
     same_policy_either_way,
 )
+from .test_atom_layout import layout_problem
 
 # --- a hand-built graph --------------------------------------------------------------------
 
@@ -331,6 +333,27 @@ def test_an_unsolvable_problem_is_explained_as_the_search_by_f_explains_it() -> 
     # the same states explored, once: no second search
     for symmetry in (True, False):
         assert _expanded(p, True, symmetry) == _expanded(p, False, symmetry)
+
+
+def test_a_human_with_no_task_is_searched_by_f(monkeypatch: pytest.MonkeyPatch) -> None:
+    """§7, "Search, focused": a human with no task only passes, so every human node has one
+    branch; there the search runs by f and builds no bounds, where a human with a task (P2) is
+    searched focused. Either way the policy is the one the option ``focus=False`` gives."""
+    made: list[int] = []
+
+    class Spy(Bounds):
+        def __init__(self, *args: Any, **kw: Any) -> None:
+            made.append(1)
+            super().__init__(*args, **kw)
+
+    monkeypatch.setattr(andor, "Bounds", Spy)
+    alone = layout_problem("a_big")
+    assert not alone.human_agenda
+    search(ground_problem(alone))
+    assert made == []
+    search(ground_problem(ehatp.load(TABLE1[1].path)))
+    assert made == [1]
+    same_policy_either_way(alone, "focus")
 
 
 def test_the_module_names_no_switch() -> None:

@@ -4,7 +4,7 @@ For the worst case with its lower bound the search is *focused* by default
 (:meth:`_Search._focus`, :mod:`.bounds`, §7 "Search, focused"): only the tips of the best
 partial policy the bounds pick are expanded, and the policy is the one the search by ``f``
 below chooses, from far fewer states. Otherwise (``focus=False``, expected cost, joint steps,
-no bound), and after a depth cut, the search by ``f``:
+no bound, a human with no task), and after a depth cut, the search by ``f``:
 
 Nodes are expanded in order of ``f = g + h``: their cheapest path cost from the root ``g`` plus,
 for the worst-case objective, a lower bound ``h`` on the cost still to pay (:mod:`.heuristic`);
@@ -105,17 +105,17 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
     solve, :class:`~.limits.Budget`) replaces ``timeout`` and ``max_memory`` when given.
     ``progress(stats, frontier)`` is called about 20 times a second; ``stats``, when given, is
     the object the search keeps its statistics in. With ``symmetry`` the nodes are canonical
-    states (docs/semantics.md §3, "Symmetry"; :mod:`.symmetry`); when a decision taken by
-    index or name order makes that unsound the search stops with status
-    ``"symmetry-unsafe"`` (the planner then solves again without it). ``heuristic`` (default:
-    on) orders a worst-case search by ``g + h`` (:mod:`.heuristic`); the policy is the same
-    either way, fewer states are expanded with it. ``focus`` (default: on; worst case with
-    the heuristic only) expands the tips of the best partial policy instead
-    (:meth:`_Search._focus`, :mod:`.bounds`): the same policy again, far fewer states. A root
-    proven to have no policy has everything reachable explored after, as the search by ``f``
-    explores it, whose whole graph says why (:mod:`.diagnose`); a state cut by the depth limit
-    (§6: the depth of a state is over the paths found, which the focused search finds fewer
-    of) sends the work back to the search by ``f``.
+    states (docs/semantics.md §3, "Symmetry"; :mod:`.symmetry`); when a decision taken by index
+    or name order makes that unsound the search stops with status ``"symmetry-unsafe"`` (the
+    planner then solves again without it). ``heuristic`` (default: on) orders a worst-case
+    search by ``g + h`` (:mod:`.heuristic`); the policy is the same either way, fewer states are
+    expanded with it. ``focus`` (default: on; worst case with the heuristic, and a human with a
+    task, only) expands the tips of the best partial policy instead (:meth:`_Search._focus`,
+    :mod:`.bounds`): the same policy again, far fewer states. A root proven to have no policy
+    has everything reachable explored after, as the search by ``f`` explores it, whose whole
+    graph says why (:mod:`.diagnose`); a state cut by the depth limit (§6: the depth of a state
+    is over the paths found, which the focused search finds fewer of) sends the work back to the
+    search by ``f``.
 
     In GTPyhop-style pseudo-code (``V``: the worst-case values kept up to date, the module's
     docstring proves the stopping rule)::
@@ -195,10 +195,12 @@ class _Search:
         self.values: Values | None = None
         self.optimal = False
         self.live: LiveWorst | None = None  # worst-case values, kept from the first goal on
-        # the focused search's lower bounds (worst case with the heuristic), and whether a
-        # depth cut sends the work back to the search by f
+        # the focused search's lower bounds (worst case with the heuristic, and a human with a
+        # task: one with none only passes, every human node has one branch, and the search by
+        # f expands what the focused one would, without its revisions; §7, "Search, focused"),
+        # and whether a depth cut sends the work back to the search by f
         self.bounds = (Bounds(self.graph, self.hfn, budget.check)
-                       if focus and self.hfn is not None else None)
+                       if focus and self.hfn is not None and grounded.human_agenda else None)
         self.unfocus = False
 
     def _opening(self, grounded: Grounded) -> EState:

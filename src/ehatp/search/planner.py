@@ -193,7 +193,8 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
     on) orders a worst-case search by a lower bound (:mod:`.heuristic`): fewer states, the
     same policy. ``focus`` (default: on) expands, with that bound, only the tips of the best
     partial policy (docs/semantics.md §7, "Search"; :mod:`.bounds`): far fewer states again,
-    the same policy; off, every state whose ``g + h`` is at most the optimum is expanded.
+    the same policy; off, or where the human has no task, every state whose ``g + h`` is at
+    most the optimum is expanded.
 
     ``keep_graph`` keeps the explored graph in ``Result.graph`` (a :class:`Relabeler`) when
     the objective is ``"preferences"`` (C11), to relabel it for another profile.
