@@ -167,6 +167,34 @@ class _Settings:
     focus: bool = True
 
 
+GC_YOUNG = 100_000
+"""The cyclic garbage collector's young-generation threshold while :func:`solve` runs
+(Python's default: 700 container objects allocated). The search pauses the collector
+(:func:`~.andor.search`, the values over the graph included); the phases around it
+(grounding, extracting the policy and building its nodes) allocate hundreds of thousands of
+objects that live on, and at the default the collector re-scans the whole graph again and
+again, to free almost nothing: 3-7 % of a solve at the K=8 points and in the compiled core
+(docs/benchmarks.md, "The garbage collector around the search"). At this threshold it still
+runs, a hundredfold less often."""
+
+
+@contextmanager
+def _few_collections() -> Iterator[None]:
+    """Raise the collector's young-generation threshold to :data:`GC_YOUNG` for the call it
+    decorates (:func:`solve`), then put the caller's back; a threshold already as high (an
+    outer solve, or the caller's own setting) is left alone."""
+    old = gc.get_threshold()
+    if old[0] >= GC_YOUNG:
+        yield
+        return
+    gc.set_threshold(GC_YOUNG, *old[1:])
+    try:
+        yield
+    finally:
+        gc.set_threshold(*old)
+
+
+@_few_collections()
 def solve(problem: Problem, *, timeout: float | None = None, max_states: int | None = None,
           max_depth: int | None = None, progress: Progress | None = None,
           max_memory: int | None = None, budget: Budget | None = None,
@@ -203,45 +231,6 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
     (:func:`_extract`), then say why there is no policy or why it is not proven optimal
     (:func:`_reason`).
     """
-    with _few_collections():
-        return _solve(problem, timeout=timeout, max_states=max_states, max_depth=max_depth,
-                      progress=progress, max_memory=max_memory, budget=budget,
-                      symmetry=symmetry, heuristic=heuristic, expand=expand,
-                      keep_graph=keep_graph, focus=focus)
-
-
-GC_YOUNG = 100_000
-"""The cyclic garbage collector's young-generation threshold while :func:`solve` runs
-(Python's default: 700 container objects allocated). The search pauses the collector
-(:func:`~.andor.search`, the values over the graph included); the phases around it
-(grounding, extracting the policy and building its nodes) allocate hundreds of thousands of
-objects that live on, and at the default the collector re-scans the whole graph again and
-again, to free almost nothing: 3-7 % of a solve at the K=8 points and in the compiled core
-(docs/benchmarks.md, "The garbage collector around the search"). At this threshold it still
-runs, a hundredfold less often."""
-
-
-@contextmanager
-def _few_collections() -> Iterator[None]:
-    """Raise the collector's young-generation threshold to :data:`GC_YOUNG` for the block,
-    then put the caller's back; a threshold already as high (an outer solve, or the caller's
-    own setting) is left alone."""
-    old = gc.get_threshold()
-    if old[0] >= GC_YOUNG:
-        yield
-        return
-    gc.set_threshold(GC_YOUNG, *old[1:])
-    try:
-        yield
-    finally:
-        gc.set_threshold(*old)
-
-
-def _solve(problem: Problem, *, timeout: float | None, max_states: int | None,
-           max_depth: int | None, progress: Progress | None, max_memory: int | None,
-           budget: Budget | None, symmetry: bool | None, heuristic: bool | None,
-           expand: bool, keep_graph: bool, focus: bool) -> Result:
-    """:func:`solve`, the collector's threshold raised."""
     if problem.objective.kind == ObjectiveKind.PREFERENCES:  # C11
         if not problem.steps.concurrent:
             raise InputError(problem.source, "[objective] kind", "preference profiles are "
