@@ -238,25 +238,14 @@ def lifted_view(policy: Policy, too_large: PolicyTooLarge, *, max_depth: int | N
                  [replace(m, to=k, renaming=0) for m, k in zip(view.moves, below, strict=True)])
         drawn_nodes.append(replace(view, id=i, moves=moves))
     drawn = replace(policy, nodes=drawn_nodes, symmetry=None)
-    folded = {i: _canonical_below(policy, real[i][0]) for i in cut}
+    identity = list(range(len(nodes)))  # canonical nodes counted as they are
+    folded = {i: _below(policy, identity, real[i][0], set()) for i in cut}
     notes = [f"lifted, drawn without its expansion: {too_large}", *cuts]
     entering: dict[int, list[PolicyMove]] = {}
     for a, b, j in edges:
         entering.setdefault(b, []).append(drawn_nodes[a].moves[j])
     return drawn, View(order, edges, folded, {}, notes, entering,
                        lifted=f"{len(policy.nodes):,} canonical nodes, {len(order):,} drawn")
-
-
-def _canonical_below(policy: Policy, n: int) -> int:
-    """Distinct canonical nodes below the canonical node ``n`` of a lifted policy."""
-    seen: set[int] = set()
-    stack = [n]
-    while stack:
-        for m in policy.nodes[stack.pop()].moves:
-            if m.to not in seen:
-                seen.add(m.to)
-                stack.append(m.to)
-    return len(seen)
 
 
 # --------------------------------------------------------------------------- DOT / SVG
