@@ -1,11 +1,14 @@
 """Where symmetry does not help (issue 17 §4): two checkouts side by side, run by run.
 
     .venv/bin/python benchmarks/speed_core.py --versus DIR [--after PATH] [--repeat N]
-        [--only NAME ...] [--validate] [--keep DIR]
+        [--only NAME ...] [--validate] [--keep DIR] [--converted]
 
 Targets: ``cubes-c8-b2-opaque-k2`` and ``cubes-c6-b3-opaque-k8`` solved with ``--no-symmetry``,
 and the IPC 2020 HTN track's two largest, ``to-Woodworking`` and ``to-Entertainment`` (HDDL, the
-robot alone, as ``benchmarks/hddl_report.py`` imports them; needs unified-planning). Every run
+robot alone, as ``benchmarks/hddl_report.py`` imports them; needs unified-planning). With
+``--converted`` each checkout converts them once, untimed, with its own ``ehatp import-hddl``,
+and the timed process reads the problem TOML, as ``ehatp solve`` does: the HDDL reader
+(unified-planning's, about 1.3 s of imports and parsing) is then not timed. Every run
 is a fresh process (``python -c``, the checkout's ``src`` first on ``sys.path``): import,
 ground, solve, write the policy JSON, and with ``--validate`` validate it too. ``DIR`` (another
 checkout, e.g. a ``git worktree`` of an older commit) and this one alternate run by run, so that
@@ -39,8 +42,12 @@ ROOT = Path(__file__).resolve().parent.parent
 CHILD = r"""
 import json, sys
 sys.path.insert(0, sys.argv[1])
-target, out, validate = sys.argv[2], sys.argv[3], sys.argv[4] == "1"
-if target in ("woodworking", "entertainment"):
+target, out, validate, converted = sys.argv[2], sys.argv[3], sys.argv[4] == "1", sys.argv[5]
+if converted:  # the problem TOML ehatp import-hddl wrote, read as ehatp solve reads it
+    import ehatp
+    problem = ehatp.load(converted)
+    kw = {}
+elif target in ("woodworking", "entertainment"):
     from ehatp.experiments.hddl_report import domains_shipped
     from ehatp.formats.hddl import import_hddl
     from ehatp.formats.hddl_sidecar import Sidecar
@@ -79,11 +86,41 @@ TARGETS = {"cubes-c8-b2-opaque-k2": "cubes-c8-b2-opaque-k2 --no-symmetry",
            "entertainment": "IPC 2020 to-Entertainment, the robot alone"}
 
 
-def run(src: str, target: str, out: Path, validate: bool) -> dict[str, Any]:
+CONVERT = r"""
+import sys
+sys.path.insert(0, sys.argv[1])
+from ehatp.cli.app import main
+from ehatp.experiments.hddl_report import domains_shipped
+target, side, out = sys.argv[2:5]
+_, dom, prob = next(d for d in domains_shipped() if d[0].endswith("to-" + target.capitalize()))
+sys.argv = ["ehatp", "import-hddl", str(dom), str(prob), "--sidecar", side, "--out", out]
+main()
+"""
+
+
+def convert(src: str, target: str, where: Path) -> Path:
+    """Convert an IPC target once with ``src``'s own ``ehatp import-hddl`` (untimed, a fresh
+    process; the robot alone, expecting nothing of it, as ``hddl_report.py`` reads it) into
+    ``where``; return the problem TOML it wrote."""
+    where.mkdir(parents=True, exist_ok=True)
+    side = where / "sidecar.toml"
+    side.write_text('[other]\nexpects = "nothing"\n', encoding="utf-8")
+    module = where / f"{target}.py"
+    proc = subprocess.run([sys.executable, "-c", CONVERT, src, target, str(side), str(module)],
+                          capture_output=True, text=True, cwd=where)
+    if proc.returncode != 0:
+        raise SystemExit(f"import-hddl of {target} with {src} failed:\n{proc.stderr}")
+    return module.with_suffix(".toml")
+
+
+def run(src: str, target: str, out: Path, validate: bool,
+        converted: Path | None = None) -> dict[str, Any]:
     """One fresh process: its row (CPU s, peak MB, what it printed, the policy's hash)."""
     proc = subprocess.Popen(
-        [sys.executable, "-c", CHILD, src, target, str(out), "1" if validate else "0"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        [sys.executable, "-c", CHILD, src, target, str(out), "1" if validate else "0",
+         str(converted) if converted else ""],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        cwd=converted.parent if converted else None)
     _, status, usage = os.wait4(proc.pid, 0)
     proc.returncode = os.waitstatus_to_exitcode(status)
     stdout = proc.stdout.read() if proc.stdout else ""
@@ -114,6 +151,10 @@ def main(argv: list[str] | None = None) -> int:
                     help=f"one of {', '.join(TARGETS)} (repeatable; default all)")
     ap.add_argument("--validate", action="store_true", help="validate each policy too")
     ap.add_argument("--keep", type=Path, metavar="DIR", help="write the policies there")
+    ap.add_argument("--converted", action="store_true",
+                    help="IPC targets: convert the HDDL once per checkout with its own "
+                         "import-hddl (untimed) and time solving the problem TOML, as "
+                         "'ehatp solve' does, without the HDDL reader")
     args = ap.parse_args(argv)
     srcs = {"before": str(Path(args.versus).resolve() / "src"),
             "after": str(Path(args.after).resolve() if args.after else ROOT / "src")}
@@ -124,10 +165,13 @@ def main(argv: list[str] | None = None) -> int:
     same = True
     for target in args.only or list(TARGETS):
         rows: dict[str, list[dict[str, Any]]] = {"before": [], "after": []}
+        ipc = args.converted and target in ("woodworking", "entertainment")
+        converted = {label: convert(src, target, keep / f"{target}-{label}") if ipc else None
+                     for label, src in srcs.items()}
         for _ in range(args.repeat):
             for label, src in srcs.items():
                 rows[label].append(run(src, target, keep / f"{target}-{label}.json",
-                                       args.validate))
+                                       args.validate, converted[label]))
         cpu = {k: statistics.median(r["cpu_s"] for r in v) for k, v in rows.items()}
         for label, rs in rows.items():
             runs = " ".join(f"{r['cpu_s']:.2f}" for r in rs)
