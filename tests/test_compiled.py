@@ -329,8 +329,9 @@ def _joint_runs() -> list[tuple[str, Any, bool | None]]:
 
 def test_the_compiled_core_writes_the_pure_python_policies_in_joint_steps(
         compiled: Path) -> None:
-    """Joint steps (docs/concurrent.md, C1-C12): ``ConcurrentSemantics``, a Python class,
-    subclasses the compiled ``Semantics``, overriding methods the compiled ones call. On
+    """Joint steps (docs/concurrent.md, C1-C12): ``ConcurrentSemantics``, compiled too,
+    subclasses ``Semantics``, overriding methods the compiled ones call, and the executor's
+    Python class ``_TracingJoint`` subclasses both it and the tracing semantics. On
     Table 1's instances (human first and whole witnessing; robot first and witnessing at the
     start), with and without symmetry, and on the stacking examples with the robot first, the
     compiled core solves each to the pure Python core's status and policy JSON, and each

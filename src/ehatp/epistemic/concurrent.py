@@ -30,6 +30,9 @@ problem asks for joint steps (:func:`semantics_for`).
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import ClassVar
+
+from mypy_extensions import mypyc_attr
 
 from ..errors import InputError
 from ..model.agenda import Agenda
@@ -90,10 +93,11 @@ def check_concurrent(grounded: Grounded) -> None:
         raise InputError(p.source, place, 'not supported with [steps] mode = "concurrent"', fix)
 
 
+@mypyc_attr(allow_interpreted_subclasses=True)  # the executor's tracing class subclasses it
 class ConcurrentSemantics(Semantics):
     """The rules C1-C12 of docs/concurrent.md (``first = "human"``: the compliant robot)."""
 
-    passive_carried = False  # a step's reply node keeps the count (C4): not §4's table
+    passive_carried: ClassVar[bool] = False  # a step's reply node keeps the count (C4)
 
     def __init__(self, grounded: Grounded) -> None:
         check_concurrent(grounded)

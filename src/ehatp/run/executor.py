@@ -70,9 +70,11 @@ class _TracingSemantics(Semantics):
         return out
 
 
-class _TracingJoint(ConcurrentSemantics, _TracingSemantics):
+class _TracingJoint(_TracingSemantics, ConcurrentSemantics):
     """Joint steps (docs/concurrent.md), remembering situation assessment likewise: a step is
-    the human's move observed, then the robot's compliant reply."""
+    the human's move observed, then the robot's compliant reply. The tracing class comes
+    first: compiled, ``ConcurrentSemantics``'s ``super()`` calls go straight to
+    ``Semantics`` (docs/compiled.md), which is what follows it here."""
 
 
 def _tracing(g: Grounded) -> _TracingSemantics:
