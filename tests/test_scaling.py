@@ -18,6 +18,8 @@ import ehatp
 from ehatp.cli.app import app
 from ehatp.domains import cooking, cubes
 from ehatp.experiments import bench
+from ehatp.experiments.classes import count
+from ehatp.formats.problem_toml import loads
 
 ROOT = Path(__file__).resolve().parents[1]
 runner = CliRunner()
@@ -170,6 +172,32 @@ def test_bench_scaling_stops_an_instance_at_its_timeout(tmp_path: Path) -> None:
     (row,) = json.loads(r.stdout)
     assert row["status"] == "timeout" and "time limit" in row["error"]
     assert row["last_phase"] is not None  # the phase the limit stopped
+
+
+def test_bench_scaling_counts_the_worlds_as_classes_only_when_asked() -> None:
+    # issue 17 §5: "|W| classes". The count is experiments.classes's (tested by hand in
+    # test_classes.py), at the node with the most worlds of the same search the row timed;
+    # cooking has no interchangeable objects, so nothing to count
+    names = ["cubes-c8-b3-opaque-k8", "cooking-k2"]
+    args = ["bench", "scaling", *[a for n in names for a in ("--only", n)]]
+    r = runner.invoke(app, [*args, "--classes", "--json", "-"])
+    assert r.exit_code == 0, r.output
+    rows = {row["instance"]: row for row in json.loads(r.stdout)}
+    cube = rows["cubes-c8-b3-opaque-k8"]
+    point = bench.select_points(None, ["cubes-c8-b3-opaque-k8"])[0]
+    (node,) = count(loads(point.toml(), "p.toml"), top=1).nodes
+    assert cube["classes"] == {"worlds": node.worlds, "classes": node.classes,
+                               "cells": list(node.cells)}
+    assert cube["classes"]["worlds"] == cube["max_worlds"] > cube["classes"]["classes"] > 1
+    assert rows["cooking-k2"]["classes"] is None
+    table = runner.invoke(app, [*args, "--classes"]).stdout.splitlines()
+    header = next(line for line in table if line.startswith("instance"))
+    assert header.split().index("classes") == header.split().index("|W|") + 2
+    line = next(line for line in table if line.startswith("cubes-c8-b3"))
+    assert f"{node.classes:,} of {node.worlds:,} [" in line
+    plain = runner.invoke(app, args)
+    assert plain.exit_code == 0 and "classes" not in plain.stdout
+    assert "classes" not in json.loads(runner.invoke(app, [*args, "--json", "-"]).stdout)[0]
 
 
 def test_bench_scaling_unknown_instance_is_one_line() -> None:

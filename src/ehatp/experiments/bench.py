@@ -331,6 +331,7 @@ import inspect, json, resource, sys, time
 t_start = time.perf_counter()
 import ehatp
 path, timeout, max_memory, symmetry = sys.argv[1], float(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
+want_classes = sys.argv[5:] == ["classes"]
 problem = ehatp.load(path)
 params = inspect.signature(ehatp.solve).parameters
 kw = {"timeout": timeout}
@@ -383,7 +384,7 @@ if marks is not None and "budget" in kw:
 usage = resource.getrusage(resource.RUSAGE_SELF)
 st = result.stats
 pol = result.policy
-print(json.dumps({
+row = {
     "status": result.status, "optimal": result.optimal, "time_s": t1 - t0,
     "process_s": t1 - t_start, "cpu_s": usage.ru_utime + usage.ru_stime,
     "search_ms": st.get("time_ms"),
@@ -396,7 +397,18 @@ print(json.dumps({
     "policy_nodes": None if pol is None else len(pol.nodes),
     "policy_bytes": None if text is None else len(text.encode()),
     "cost": None if pol is None else (float(pol.cost) if pol.cost is not None else None),
-    "reason": result.reason}))
+    "reason": result.reason}
+if want_classes:  # after every timed figure: a second search, over canonical states
+    try:
+        from ehatp.experiments.classes import count
+    except ImportError:  # another checkout, from before the count
+        node = None
+    else:
+        report = count(problem, top=1, timeout=timeout)
+        node = report.nodes[0] if report.nodes and report.status == "solved" else None
+    row["classes"] = None if node is None else {
+        "worlds": node.worlds, "classes": node.classes, "cells": list(node.cells)}
+print(json.dumps(row))
 """
 
 PHASES = ("grounding", "search", "values", "extraction", "writing")
@@ -440,7 +452,7 @@ def _phase_order(g: str) -> tuple[int, str]:
 
 def run_point(point: GridPoint, *, timeout: float, max_memory: int = 0,
               src: str | None = None, workdir: str | None = None,
-              symmetry: bool | None = None) -> dict[str, Any]:
+              symmetry: bool | None = None, classes: bool = False) -> dict[str, Any]:
     """Solve ``point`` in a fresh Python process (``src``: the ``src`` directory of another
     checkout to time instead of this one; ``symmetry``: force the reduction of
     docs/semantics.md §3 on or off, default the problem's). The child stops itself at
@@ -450,7 +462,11 @@ def run_point(point: GridPoint, *, timeout: float, max_memory: int = 0,
     policy's JSON; ``cpu_s``: the whole process's CPU time, start-up and loading included;
     ``peak_mb``: its largest resident size; ``phases_s``: seconds per budget phase,
     ``phase_shares``: their shares by :data:`PHASES`; ``stats``: every count the solver
-    reports), and ``states_per_s``."""
+    reports), and ``states_per_s``. With ``classes``, also ``classes``: the human's worlds
+    as classes at the node with the most (issue 17 §2; :func:`~.classes.count`, its
+    ``worlds``, ``classes`` and ``cells``), counted after every timed figure by a second
+    search of at most ``timeout``, over canonical states; None when the problem has no
+    interchangeable objects or that search did not finish."""
     import json
     import os
     import subprocess
@@ -469,12 +485,13 @@ def run_point(point: GridPoint, *, timeout: float, max_memory: int = 0,
         with open(path, "w", encoding="utf-8") as f:
             f.write(point.toml())
         sym = "default" if symmetry is None else ("on" if symmetry else "off")
-        cmd = [sys.executable, "-c", _CHILD, path, str(timeout), str(max_memory), sym]
+        cmd = [sys.executable, "-c", _CHILD, path, str(timeout), str(max_memory), sym,
+               *(["classes"] if classes else [])]
+        wait = (2 if classes else 1) * timeout * 1.05 + 10
         try:
-            proc = subprocess.run(cmd, capture_output=True, text=True, env=env,
-                                  timeout=timeout * 1.05 + 10)
+            proc = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=wait)
         except subprocess.TimeoutExpired:
-            row.update(status="killed", error=f"did not stop within {timeout * 1.05 + 10:.0f} s")
+            row.update(status="killed", error=f"did not stop within {wait:.0f} s")
             return row
     lines = proc.stdout.strip().splitlines()
     if proc.returncode != 0 or not lines:
@@ -517,11 +534,12 @@ def run_scaling(points: Sequence[GridPoint], *, timeout: float, max_memory: int 
                 repeat: int = 1, src: str | None = None,
                 notify: ScalingNotify | None = None,
                 symmetry: bool | None = None,
-                done: ScalingDone | None = None) -> list[dict[str, Any]]:
+                done: ScalingDone | None = None, classes: bool = False) -> list[dict[str, Any]]:
     """Return one row per point, each point run ``repeat`` times in its own process, with the
     medians of :data:`MEDIAN_KEYS` (the counts are the same every run; the phases are the last
     run's). ``notify`` is called before each run, ``done`` with each point's row once it is
-    finished (:func:`progress_line` says it in one line)."""
+    finished (:func:`progress_line` says it in one line); ``classes``: as
+    :func:`run_point`."""
     import statistics
 
     rows = []
@@ -531,7 +549,7 @@ def run_scaling(points: Sequence[GridPoint], *, timeout: float, max_memory: int 
             if notify is not None:
                 notify(p, i, len(points), r)
             runs.append(run_point(p, timeout=timeout, max_memory=max_memory, src=src,
-                                  symmetry=symmetry))
+                                  symmetry=symmetry, classes=classes))
             if runs[-1]["status"] not in ("solved", "unsolvable"):
                 break  # a limit or a crash: repeating it tells nothing more
         row = dict(runs[-1])
@@ -566,16 +584,28 @@ SCALING_COLUMNS = ("instance", "status", "time s", "CPU s", "generated", "distin
 the timed work in grounding / search / values / extraction / writing."""
 
 
-def scaling_cells(r: dict[str, Any]) -> list[str]:
+CLASSES_COLUMN = "|W| classes"
+"""The column ``--classes`` adds after ``|W|``: the classes of the node with the most worlds
+(:func:`run_point`), and the sizes of its cells of two objects or more."""
+
+
+def scaling_cells(r: dict[str, Any], classes: bool = False) -> list[str]:
+    """Return the row's cells under :data:`SCALING_COLUMNS` (``classes``: with
+    :data:`CLASSES_COLUMN` after ``|W|``, ``-`` where nothing was counted)."""
     def n(x: Any, fmt: str = ",") -> str:
         return "-" if x is None else format(x, fmt)
 
     kb = None if r.get("policy_bytes") is None else r["policy_bytes"] / 1024
     status = r["status"] if r.get("optimal", True) or r["status"] != "solved" else "solved*"
-    return [r["instance"], status, n(r.get("time_s"), ".2f"), n(r.get("cpu_s"), ".2f"),
-            n(r.get("generated")), n(r.get("distinct")), n(_round(r.get("states_per_s"))),
-            n(r.get("max_worlds")), n(r.get("peak_mb"), ".0f"), n(r.get("policy_nodes")),
-            n(kb, ",.0f"), format_shares(r.get("phase_shares"))]
+    cells = [r["instance"], status, n(r.get("time_s"), ".2f"), n(r.get("cpu_s"), ".2f"),
+             n(r.get("generated")), n(r.get("distinct")), n(_round(r.get("states_per_s"))),
+             n(r.get("max_worlds")), n(r.get("peak_mb"), ".0f"), n(r.get("policy_nodes")),
+             n(kb, ",.0f"), format_shares(r.get("phase_shares"))]
+    if classes:
+        c = r.get("classes")
+        cells.insert(8, "-" if not c else f"{c['classes']:,} of {c['worlds']:,}" + (
+            f" [{', '.join(map(str, c['cells']))}]" if c["cells"] else ""))
+    return cells
 
 
 def format_shares(shares: dict[str, float] | None) -> str:
@@ -600,15 +630,22 @@ SCALING_TITLE = ("Scaling: generated problems, one fresh process each (time = me
 
 
 def format_scaling(rows: Sequence[dict[str, Any]]) -> str:
-    """Plain aligned text."""
-    grid = [list(SCALING_COLUMNS), *[scaling_cells(r) for r in rows]]
-    widths = [max(len(row[i]) for row in grid) for i in range(len(SCALING_COLUMNS))]
+    """Plain aligned text (with :data:`CLASSES_COLUMN` when a row has ``classes``)."""
+    classes = any("classes" in r for r in rows)
+    head = list(SCALING_COLUMNS)
+    if classes:
+        head.insert(8, CLASSES_COLUMN)
+    grid = [head, *[scaling_cells(r, classes) for r in rows]]
+    widths = [max(len(row[i]) for row in grid) for i in range(len(head))]
 
     def line(cells: list[str]) -> str:
         return "  ".join(c.ljust(w) if i < 2 else c.rjust(w)
                          for i, (c, w) in enumerate(zip(cells, widths, strict=True))).rstrip()
 
-    out = [SCALING_TITLE, "", line(grid[0]), "  ".join("-" * w for w in widths)]
+    title = SCALING_TITLE + ("\n|W| classes = the human's worlds as classes at the node with "
+                             "the most [cells], counted by a second search, not timed"
+                             if classes else "")
+    out = [title, "", line(grid[0]), "  ".join("-" * w for w in widths)]
     out += [line(c) for c in grid[1:]]
     notes = [f"  {r['instance']}: {r['error']}" + _cut(r) for r in rows if r.get("error")]
     if any(r["status"] == "solved" and not r.get("optimal", True) for r in rows):
