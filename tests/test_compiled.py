@@ -394,7 +394,7 @@ def test_the_compiled_core_solves_ipc_woodworking_as_pure_python_does(compiled: 
     """IPC 2020 to-Woodworking, the robot alone, grounded on demand: a compiled build that
     typed the model's tables ``dict`` skipped the on-demand grounding and answered
     unsolvable after 116,644 states (docs/compiled.md). Both cores must find the same policy
-    (cost 13 over 222,123 states, docs/benchmarks.md)."""
+    (cost 13 over 126,569 states, docs/benchmarks.md)."""
     pytest.importorskip("unified_planning", reason="ehatp[hddl] (unified-planning) not installed")
     fast, pure = _both(WOODWORKING, compiled)
     assert _is_compiled(fast.pop("andor")) and not _is_compiled(pure.pop("andor"))

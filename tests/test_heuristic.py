@@ -4,12 +4,15 @@ move costs, and the same policies with it as without it."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import ehatp
 from ehatp import Costs, Domain, Var
+from ehatp.epistemic.semantics import Semantics
 from ehatp.experiments import agreement, randomgen
 from ehatp.model.grounding import ground_problem
 from ehatp.search.andor import GOAL, search
@@ -141,6 +144,29 @@ def test_a_block_counts_every_member() -> None:
     assert Heuristic(sem.g).agenda(es.robot_agenda, robot=True) == (3, 1)  # b; c(o1) is done
 
 
+def test_the_robot_alone_looks_one_action_ahead() -> None:
+    """Derived by hand ("The robot alone", search/heuristic.py). The robot must ``tidy(o1)``
+    and the human has no task. On its own the agenda bounds nothing: ``tidy`` has a
+    done-condition, so it may be skipped for free (0, and 0 actions). But ``did(o1)`` is
+    false and only ``a(o1)`` makes it true, which ``tidy`` never does: the only option now is
+    the method ``slow``'s first ``b`` (3), leaving ``b`` (3), so the robot's actions cost 6,
+    2 of them, and the human passes between them once (1): h = 7, exactly the optimum
+    (b, pass, b)."""
+    p = robot_only(["tidy(o1)"])
+    g = ground_problem(p)
+    root = Semantics(g).initial()
+    assert Heuristic(g)(root) == 0
+    ahead = Heuristic(g, Semantics(g).R)
+    assert ahead.front(root.robot_agenda, root.true) == (6, 2)
+    assert ahead(root) == 7
+    r = ehatp.solve(p)
+    assert r.policy is not None and r.policy.cost == 7
+    with pytest.raises(ValueError, match="no task"):
+        Heuristic(ground_problem(problem(chores(), init=[], robot=["tidy(o1)"],
+                                         human=["h(o1)"], objects={"thing": ["o1"]})),
+                  Semantics(g).R)
+
+
 def test_fewer_states_with_the_bound_same_policy() -> None:
     p = robot_only(["two", "two", "a(o1)", "ping"])
     off = search(ground_problem(p), heuristic=False)
@@ -189,8 +215,24 @@ def test_the_bound_never_overestimates(seed: int) -> None:
     (docs/concurrent.md) search without it."""
     p = randomgen.problem(seed)
     assume(not p.steps.concurrent)
+    _bound_holds(p, seed)
+
+
+@SETTINGS
+@given(st.integers(0, 2**32 - 1))
+def test_the_bound_one_action_ahead_never_overestimates(seed: int) -> None:
+    """The same on random problems whose human is given no task, where the robot's bound
+    looks one action ahead ("The robot alone")."""
+    p = randomgen.problem(seed)
+    assume(not p.steps.concurrent)
+    _bound_holds(dataclasses.replace(p, human_agenda=()), seed)
+
+
+def _bound_holds(p: ehatp.Problem, seed: int) -> None:
+    """The bound the search uses on ``p`` (one action ahead when the human has no task)
+    never overestimates a node's value, is 0 at goals and consistent."""
     g = ground_problem(p)
-    h = Heuristic(g)
+    h = Heuristic(g, None if g.human_agenda else Semantics(g).R)
     out = search(g, max_states=agreement.MAX_STATES, timeout=10, heuristic=True)
     gr = out.graph
     if out.status == "solved":

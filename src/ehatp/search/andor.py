@@ -179,10 +179,13 @@ class _Search:
         self.early_stop = grounded.problem.objective.kind == ObjectiveKind.WORST_CASE
         # joint steps (docs/concurrent.md) have no lower bound nor symmetry reduction yet
         joint = grounded.problem.steps.concurrent
-        self.hfn = Heuristic(grounded) if self.early_stop and heuristic and not joint else None
         sym = detect(grounded, budget.check) if symmetry and not joint else None
         self.sem = semantics_for(grounded) if sym is None else SymSemantics(grounded, sym)
         self.sem.bound(budget.check)
+        # a human with no task only passes: the robot's bound looks one action ahead
+        # (search/heuristic.py, "The robot alone")
+        self.hfn = (Heuristic(grounded, None if grounded.human_agenda else self.sem.R)
+                    if self.early_stop and heuristic and not joint else None)
         self.graph = Graph(self.sem)
         self.root = self._add_root(self._opening(grounded))
         # by f = g + h, then g (within a level as the uniform-cost search would: shallow

@@ -54,6 +54,24 @@ evaluated in ``T`` or in the worlds, ``ask``, ``inform``, unseen actions and ``K
 state variables and every ``[human]`` / ``[communication]`` option leave these arguments
 untouched: nothing here reads a state, only agendas, costs and whose turn it is.
 
+**The robot alone: one action ahead** (``Heuristic(grounded, robot=...)``). When the human
+has no task (``A_H = {()}``), it only passes (§4: no action and no question of its own), so
+``T`` changes only by the robot's actions, and the robot's agenda only by them too: the next
+robot action of any path from ``n`` is one of ``refine_R(tn_R, T)``, the options of the state
+the robot is in now, taken in that state (§4). So its actions still cost at least
+
+- ``front_cost = min over (a, rest) of refine_R(tn_R, T) of cost(a) + cost_R(rest)`` (0 for
+  ``FINISH``; infinite with no option, since nothing will ever change ``T`` or ``tn_R``),
+
+and likewise ``front_count`` with each action counting 1. Both are at least ``cost_R`` and
+``count_R`` (the refinement step above), and replace them in ``R`` and ``H``. Consistency: a
+robot action ``(a, rest)`` of cost ``k`` is one of the options, so ``front(n) <= k +
+cost_R(rest) <= k + front(c)``; every other move (``wait``, ``inform``, ``pass``, ...)
+leaves ``T`` and ``tn_R``, hence ``front``, as they are. ``refine_R`` commutes with a renaming
+of objects (§3), so the bound still does not change under one. A refinement nested too deep
+(§1, ``max_decomposition``) gives the agenda-only bound instead: the search says so itself
+when it expands the node.
+
 **Consistency** (what the stopping rule needs): along every edge ``n -> c`` of cost ``k``,
 ``h(n) <= k + h(c)`` — an action lowers its own agent's ``cost`` by at most its cost and its
 ``count`` by at most 1, the other agent's bound only grows (whose turn it is flips), a move
@@ -69,9 +87,11 @@ from collections.abc import Callable
 from fractions import Fraction
 
 from ..epistemic.state import ROBOT, EState
+from ..errors import DomainError
 from ..model.agenda import Agenda, Block
 from ..model.domain import AgentModel, Operator
-from ..model.grounded import Grounded
+from ..model.grounded import FINISH, Grounded
+from ..model.htn import Refiner
 from ..model.problem import Cost
 
 INF = float("inf")
@@ -137,9 +157,11 @@ class Heuristic:
     """``h`` of epistemic states (the module's docstring gives the bound and its proof, after
     docs/semantics.md §1, §4, §5, §6). Computed once per problem on the lifted models; an
     agenda's cost and count are cached, so ``h`` of a state is two dictionary lookups once its
-    agendas have been seen."""
+    agendas have been seen. With ``robot`` (the robot's refiner, ``M_R``; for a human with no
+    task only: the module's docstring, "The robot alone"), the robot's terms look one action
+    ahead in ``T``."""
 
-    def __init__(self, grounded: Grounded) -> None:
+    def __init__(self, grounded: Grounded, robot: Refiner | None = None) -> None:
         p = grounded.problem
         d, c = p.domain, p.costs
 
@@ -162,11 +184,18 @@ class Heuristic:
         self._human_agendas: dict[Agenda, tuple[Bound, Bound]] = {}
         self._robot_tasks: dict[int, tuple[Bound, Bound]] = {}  # task -> its bound
         self._human_tasks: dict[int, tuple[Bound, Bound]] = {}
+        if robot is not None and grounded.human_agenda:
+            raise ValueError("one action ahead is a bound only for a human with no task")
+        self._front = robot
 
     def __call__(self, es: EState) -> Bound:
         """§6-§7: a lower bound on the worst-case cost from ``es`` to a goal (0 at a goal,
         INF when an agenda can never finish)."""
-        rc, rn = self._robot_agendas.get(es.robot_agenda) or self.agenda(es.robot_agenda, True)
+        if self._front is not None:
+            rc, rn = self.front(es.robot_agenda, es.true)
+        else:
+            rc, rn = (self._robot_agendas.get(es.robot_agenda)
+                      or self.agenda(es.robot_agenda, True))
         # §3: the robot cannot tell the hypotheses apart, and a goal finishes one of them at
         # least (each bound is consistent, so their minimum is)
         hc, hn = self.human_bound(es.human_agendas)
@@ -182,6 +211,30 @@ class Heuristic:
             if x > h:
                 h = x
         return r + h
+
+    def front(self, agenda: Agenda, t: int) -> tuple[Bound, Bound]:
+        """The robot alone (the module's docstring): the least, over the options ``(a, rest)``
+        of ``agenda`` in ``t`` (§1, ``M_R``), of ``a``'s cost plus ``rest``'s bound, and of 1
+        plus ``rest``'s count; (0, 0) when it can finish, INF with no option. The options are
+        the refiner's, remembered per (agenda, state), which the search reads again when it
+        expands the node."""
+        assert self._front is not None
+        try:
+            options = self._front.refine(agenda, t)
+        except DomainError:  # nested too deep: the search reports it where it expands
+            return self.agenda(agenda, True)
+        cost: Bound = INF
+        count: Bound = INF
+        for op, rest in options:
+            if op == FINISH:
+                return 0, 0
+            rc, rn = self._robot_agendas.get(rest) or self.agenda(rest, True)
+            price = self._g.robot.ops[op].cost  # what the move costs (§7)
+            if price + rc < cost:
+                cost = price + rc
+            if 1 + rn < count:
+                count = 1 + rn
+        return cost, count
 
     def human_bound(self, agendas: tuple[Agenda, ...]) -> tuple[Bound, Bound]:
         """§3, §7: the least cost and count of finishing any hypothesis of ``A_H``."""
