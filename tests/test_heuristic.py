@@ -167,6 +167,26 @@ def test_the_robot_alone_looks_one_action_ahead() -> None:
                   Semantics(g).R)
 
 
+def test_requeueing_by_the_whole_bound_expands_as_queueing_by_it(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The search queues a node by its agendas' bound and requeues it, once out, by the
+    whole bound (search/andor.py): the same nodes in the same order as queueing every node by
+    the whole bound, so the same counts and the same policy, on random problems whose human
+    has no task."""
+    problems = [dataclasses.replace(p, human_agenda=()) for p in
+                (randomgen.problem(seed) for seed in range(40)) if not p.steps.concurrent]
+    lazy = [ehatp.solve(p) for p in problems]
+    monkeypatch.setattr(Heuristic, "quick", Heuristic.__call__)
+    eager = [ehatp.solve(p) for p in problems]
+    looked = 0
+    for a, b in zip(lazy, eager, strict=True):
+        assert a.status == b.status
+        assert (a.policy.to_json() if a.policy else None) == (
+            b.policy.to_json() if b.policy else None)  # statistics included
+        looked += a.stats["expanded"] != a.stats["generated"]
+    assert len(problems) >= 30 and looked
+
+
 def test_fewer_states_with_the_bound_same_policy() -> None:
     p = robot_only(["two", "two", "a(o1)", "ping"])
     off = search(ground_problem(p), heuristic=False)

@@ -256,12 +256,24 @@ class _Search:
     def _explore(self) -> bool:
         """Expand nodes in order of ``(f, g, id)`` until the stopping rule or a limit ends
         the search (False), or nothing is left to expand (True)."""
-        gr, heap = self.graph, self.heap
-        heappop = heapq.heappop
+        gr, heap, hfn = self.graph, self.heap, self.hfn
+        heappop, heappush = heapq.heappop, heapq.heappush
+        # the robot alone looks one action ahead (search/heuristic.py): a node is queued by
+        # the bound of its agendas and requeued, once out, by the whole bound if that is more,
+        # so only the nodes that come out refine the robot's agenda for it; the order of
+        # expansion is that of queueing by the whole bound
+        ahead: dict[int, Bound] | None = {} if hfn is not None and hfn.looks_ahead else None
         while heap:
             f, g, n = heappop(heap)
             if gr.status[n] != OPEN or g > gr.g[n]:
                 continue  # expanded already, or reached since by a cheaper path
+            if ahead is not None and hfn is not None:
+                h = ahead.get(n)
+                if h is None:
+                    h = ahead[n] = hfn(gr.states[n])
+                if g + h > f:
+                    heappush(heap, (g + h, g, n))
+                    continue
             if f > self.level:
                 if self._proven(f):
                     return False
@@ -476,7 +488,7 @@ def _expand(gr: Graph, n: int, heap: list[Entry] | None, stats: Stats, max_depth
                 if len(child.worlds) > stats.max_worlds:
                     stats.max_worlds = len(child.worlds)
                 if heap is not None:
-                    heappush(heap, (g1 if hfn is None else g1 + hfn(child), g1, c))
+                    heappush(heap, (g1 if hfn is None else g1 + hfn.quick(child), g1, c))
                 edges.append(Edge(gr.descriptor(move, c), c, pid))
                 continue
             move = gr.descriptor(move, c)
@@ -484,7 +496,7 @@ def _expand(gr: Graph, n: int, heap: list[Entry] | None, stats: Stats, max_depth
         if g1 < gs[c] and status[c] == OPEN:
             gs[c] = g1
             if heap is not None:
-                heappush(heap, (g1 if hfn is None else g1 + hfn(states[c]), g1, c))
+                heappush(heap, (g1 if hfn is None else g1 + hfn.quick(states[c]), g1, c))
         if d0 < depth[c]:
             _lower_depth(gr, c, d0, heap, max_depth, hfn)
         gr.add_parent(c, n)
@@ -566,8 +578,8 @@ def _lower_depth(gr: Graph, c: int, d: int, heap: list[Entry] | None, max_depth:
                 del gr.dead_why[x]
                 gx = gr.g[x]
                 if heap is not None:
-                    heapq.heappush(heap, (gx if hfn is None else gx + hfn(gr.states[x]), gx,
-                                          x))
+                    heapq.heappush(heap, (gx if hfn is None else gx + hfn.quick(gr.states[x]),
+                                          gx, x))
         elif gr.status[x] == EXPANDED:
             stack.extend((e.child, dx + 1) for e in gr.edges[x] if e.child >= 0)
 

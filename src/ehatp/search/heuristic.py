@@ -188,10 +188,24 @@ class Heuristic:
             raise ValueError("one action ahead is a bound only for a human with no task")
         self._front = robot
 
+    @property
+    def looks_ahead(self) -> bool:
+        """Whether the robot's terms look one action ahead (the module's docstring)."""
+        return self._front is not None
+
     def __call__(self, es: EState) -> Bound:
         """§6-§7: a lower bound on the worst-case cost from ``es`` to a goal (0 at a goal,
         INF when an agenda can never finish)."""
-        if self._front is not None:
+        return self._bound(es, self._front is not None)
+
+    def quick(self, es: EState) -> Bound:
+        """The bound without looking ahead, from the agendas alone (at most ``self(es)``,
+        consistent too): what the search queues a node by, reading the whole bound only when
+        the node comes out of the queue (:mod:`.andor`)."""
+        return self._bound(es, False)
+
+    def _bound(self, es: EState, ahead: bool) -> Bound:
+        if ahead:
             rc, rn = self.front(es.robot_agenda, es.true)
         else:
             rc, rn = (self._robot_agendas.get(es.robot_agenda)
