@@ -410,6 +410,12 @@ class Rules:
         mask = self.grounded.visible_mask(t)
         if self.watch is not None:
             self.watch(worlds, t, mask)
+        # a world that agrees with T on every unit seen leaves each unit some world that
+        # agrees, so no unit revises and the unit-by-unit filter keeps exactly the worlds
+        # that agree on all of them (and an empty mask keeps every world)
+        agree = frozenset(w for w in worlds if (w[0] ^ t) & mask == 0)
+        if agree:
+            return agree
         return self.observe(worlds, t, _bits(mask))
 
     def cop(self, t: int) -> bool:
