@@ -70,7 +70,9 @@ cost_R(rest) <= k + front(c)``; every other move (``wait``, ``inform``, ``pass``
 leaves ``T`` and ``tn_R``, hence ``front``, as they are. ``refine_R`` commutes with a renaming
 of objects (§3), so the bound still does not change under one. A refinement nested too deep
 (§1, ``max_decomposition``) gives the agenda-only bound instead: the search says so itself
-when it expands the node.
+when it expands the node. (Two or three actions ahead, tried on the IPC domains: Entertainment
+expands 11,814 and 10,554 states instead of 13,246, but po-Monroe takes 28 and 102 s instead
+of 5.7, refining every option's options; one action is kept.)
 
 **Consistency** (what the stopping rule needs): along every edge ``n -> c`` of cost ``k``,
 ``h(n) <= k + h(c)`` — an action lowers its own agent's ``cost`` by at most its cost and its
