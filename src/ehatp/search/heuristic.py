@@ -201,7 +201,7 @@ class Heuristic:
         return self._bound(es, self._front is not None)
 
     def quick(self, es: EState) -> Bound:
-        """The bound without looking ahead, from the agendas alone (at most ``self(es)``,
+        """§7: the bound without looking ahead, from the agendas alone (at most ``self(es)``,
         consistent too): what the search queues a node by, reading the whole bound only when
         the node comes out of the queue (:mod:`.andor`)."""
         return self._bound(es, False)
@@ -229,11 +229,11 @@ class Heuristic:
         return r + h
 
     def front(self, agenda: Agenda, t: int) -> tuple[Bound, Bound]:
-        """The robot alone (the module's docstring): the least, over the options ``(a, rest)``
-        of ``agenda`` in ``t`` (§1, ``M_R``), of ``a``'s cost plus ``rest``'s bound, and of 1
-        plus ``rest``'s count; (0, 0) when it can finish, INF with no option. The options are
-        the refiner's, remembered per (agenda, state), which the search reads again when it
-        expands the node."""
+        """§1, §4, §7, the robot alone (the module's docstring): the least, over the options
+        ``(a, rest)`` of ``agenda`` in ``t`` (``M_R``), of ``a``'s cost plus ``rest``'s bound,
+        and of 1 plus ``rest``'s count; (0, 0) when it can finish, INF with no option. The
+        options are the refiner's, remembered per (agenda, state), which the search reads
+        again when it expands the node."""
         assert self._front is not None
         try:
             options = self._front.refine(agenda, t)
