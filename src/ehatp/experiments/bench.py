@@ -587,6 +587,7 @@ the timed work in grounding / search / values / extraction / writing."""
 CLASSES_COLUMN = "|W| classes"
 """The column ``--classes`` adds after ``|W|``: the classes of the node with the most worlds
 (:func:`run_point`), and the sizes of its cells of two objects or more."""
+_CLASSES_AT = SCALING_COLUMNS.index("|W|") + 1  # where that column goes
 
 
 def scaling_cells(r: dict[str, Any], classes: bool = False) -> list[str]:
@@ -603,7 +604,7 @@ def scaling_cells(r: dict[str, Any], classes: bool = False) -> list[str]:
              n(kb, ",.0f"), format_shares(r.get("phase_shares"))]
     if classes:
         c = r.get("classes")
-        cells.insert(8, "-" if not c else f"{c['classes']:,} of {c['worlds']:,}" + (
+        cells.insert(_CLASSES_AT, "-" if not c else f"{c['classes']:,} of {c['worlds']:,}" + (
             f" [{', '.join(map(str, c['cells']))}]" if c["cells"] else ""))
     return cells
 
@@ -634,7 +635,7 @@ def format_scaling(rows: Sequence[dict[str, Any]]) -> str:
     classes = any("classes" in r for r in rows)
     head = list(SCALING_COLUMNS)
     if classes:
-        head.insert(8, CLASSES_COLUMN)
+        head.insert(_CLASSES_AT, CLASSES_COLUMN)
     grid = [head, *[scaling_cells(r, classes) for r in rows]]
     widths = [max(len(row[i]) for row in grid) for i in range(len(head))]
 
