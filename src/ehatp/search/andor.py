@@ -262,15 +262,16 @@ class _Search:
         # the bound of its agendas and requeued, once out, by the whole bound if that is more,
         # so only the nodes that come out refine the robot's agenda for it; the order of
         # expansion is that of queueing by the whole bound
-        ahead: dict[int, Bound] | None = {} if hfn is not None and hfn.looks_ahead else None
+        look = hfn if hfn is not None and hfn.looks_ahead else None
+        ahead: dict[int, Bound] = {}  # node -> its whole bound, once it came out
         while heap:
             f, g, n = heappop(heap)
             if gr.status[n] != OPEN or g > gr.g[n]:
                 continue  # expanded already, or reached since by a cheaper path
-            if ahead is not None and hfn is not None:
+            if look is not None:
                 h = ahead.get(n)
                 if h is None:
-                    h = ahead[n] = hfn(gr.states[n])
+                    h = ahead[n] = look(gr.states[n])
                 if g + h > f:
                     heappush(heap, (g + h, g, n))
                     continue
@@ -280,7 +281,7 @@ class _Search:
                 self.level = f
             if self._limit_reached():
                 return False
-            _expand(gr, n, heap, self.stats, self.max_depth, self.hfn, self.max_states)
+            _expand(gr, n, heap, self.stats, self.max_depth, hfn, self.max_states)
             if self._after_expansion(n):
                 return False
         return True
