@@ -11,10 +11,11 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Callable
+from typing import Any
 
 from ..model.agenda import Agenda
 from ..model.formula import And, Formula, GAtom, GTest, Not, Or
-from ..model.grounded import GModel, Grounded
+from ..model.grounded import GMethod, GModel, GOp, Grounded
 from .symmetry import _TOKEN, NotSymmetric, Symmetry
 
 
@@ -96,6 +97,43 @@ class _Checker:
         self.grounded, self.sym, self.models = grounded, sym, models
         self.check = check
         self.formula_of = {id(fn): f for f, fn in grounded.fns.items()}
+        # what a renaming is compared against does not depend on it: each formula's and each
+        # task's methods' comparable value, computed once for every swap tried
+        self._plain: dict[int, tuple[Formula, object]] = {}
+        self._plain_methods: dict[tuple[int, int], Counter[Any]] = {}
+        self._atoms: dict[int, tuple[object, int]] = {}  # id -> (the item, the atoms it reads)
+
+    def plain(self, f: Formula | None) -> object:
+        """Return ``f`` as a comparable value, not renamed (remembered)."""
+        if f is None:
+            return None
+        r = self._plain.get(id(f))
+        if r is None:  # the formula is kept with its value, so that its id stays its own
+            r = self._plain[id(f)] = (f, _norm(f, {}))
+        return r[1]
+
+    def atoms(self, x: GOp | GMethod) -> int:
+        """Return the atoms a ground operator or method names, as a mask (remembered): a
+        renaming that moves none of them, nor any task it names, maps it onto itself."""
+        r = self._atoms.get(id(x))
+        if r is None:
+            m = _mask(x.pre_f)
+            if isinstance(x, GOp):
+                m |= x.add | x.dele | _mask(x.done_f)
+                for c, a, d in x.cond:
+                    m |= a | d | _mask(self.formula_of.get(id(c)))
+            r = self._atoms[id(x)] = (x, m)
+        return r[1]
+
+    def plain_methods(self, model: GModel, t: int) -> Counter[Any]:
+        """Return task ``t``'s methods in ``model`` as a multiset of comparable values, not
+        renamed (remembered)."""
+        key = (id(model), t)
+        r = self._plain_methods.get(key)
+        if r is None:
+            r = self._plain_methods[key] = Counter(
+                (self.plain(x.pre_f), x.subtasks, x.order) for x in model.methods[t])
+        return r
 
     def swap(self, a: str, b: str) -> bool:
         """Return whether swapping ``a`` and ``b`` is an automorphism (§3, "Symmetry"): the
@@ -146,11 +184,18 @@ class _Checker:
         effects, cost, done-condition), methods (precondition, subtasks, order) and
         done-conditions onto the renamed tasks' own."""
         st, ag, f, fn, tmap = ren.state, ren.agenda, ren.formula, ren.condition, ren.tmap
-        check = self.check
+        check, atoms, plain = self.check, self.atoms, self.plain
+        # a task the renaming keeps, whose action or methods name nothing it moves, is
+        # mapped onto itself: only the others are compared (two multisets with a common part
+        # are equal exactly when the rest are)
+        moving = self.sym.moving(ren.pid)
         for n, (t, op) in enumerate(model.ops.items()):
             if check is not None and not n & 63:
                 check()
-            o2 = model.ops.get(tmap.get(t, t))
+            u = tmap.get(t, t)
+            if u == t and not atoms(op) & moving:
+                continue
+            o2 = model.ops.get(u)
             if o2 is None or op.cost != o2.cost or st(op.add) != o2.add \
                     or st(op.dele) != o2.dele or f(op.pre_f) != f(o2.pre_f, False) \
                     or f(op.done_f) != f(o2.done_f, False):
@@ -162,15 +207,24 @@ class _Checker:
         for n, (t, methods) in enumerate(model.methods.items()):
             if check is not None and not n & 63:
                 check()
-            methods2 = model.methods.get(tmap.get(t, t))
-            if methods2 is None:
+            u = tmap.get(t, t)
+            if u == t:
+                moved = [x for x in methods
+                         if atoms(x) & moving or any(s in tmap for s in x.subtasks)]
+                if moved and Counter((f(x.pre_f), ag(x.subtasks), x.order) for x in moved) \
+                        != Counter((plain(x.pre_f), x.subtasks, x.order) for x in moved):
+                    return False
+                continue
+            if u not in model.methods:
                 return False
             k1 = Counter((f(x.pre_f), ag(x.subtasks), x.order) for x in methods)
-            k2 = Counter((f(x.pre_f, False), x.subtasks, x.order) for x in methods2)
-            if k1 != k2:
+            if k1 != self.plain_methods(model, u):
                 return False
         for t, (df, _) in model.done.items():
-            d2 = model.done.get(tmap.get(t, t))
+            u = tmap.get(t, t)
+            if u == t and not _mask(df) & moving:
+                continue
+            d2 = model.done.get(u)
             if d2 is None or f(df) != f(d2[0], False):
                 return False
         for t in model.ops.keys() | model.methods.keys() | model.done.keys():
@@ -199,7 +253,7 @@ class _Renamed:
 
     def formula(self, x: Formula | None, mapped: bool = True) -> object:
         """Return ``x`` as a comparable value, renamed unless ``mapped`` is False."""
-        return _norm(x, self.amap if mapped else {})
+        return _norm(x, self.amap) if mapped else self.checker.plain(x)
 
     def condition(self, x: Callable[[int], bool], mapped: bool = True) -> object:
         """Return the compiled condition ``x`` as a comparable value (its formula)."""
@@ -207,6 +261,24 @@ class _Renamed:
         if form is None:
             raise NotSymmetric("an uncompiled condition")
         return self.formula(form, mapped)
+
+
+def _mask(f: Formula | None) -> int:
+    """Return the atoms a ground formula reads, as a mask."""
+    if f is None:
+        return 0
+    if isinstance(f, GAtom):
+        return 1 << f.index
+    if isinstance(f, GTest):
+        return _mask(f.body)
+    if isinstance(f, Not):
+        return _mask(f.arg)
+    if isinstance(f, And | Or):
+        m = 0
+        for a in f.args:
+            m |= _mask(a)
+        return m
+    raise NotSymmetric(f"a ground formula of kind {type(f).__name__}")
 
 
 def _norm(f: Formula | None, amap: dict[int, int]) -> object:

@@ -378,7 +378,7 @@ def _match(sym: Any, tau: int, move: Move, child: EState, real: list[Move],
            used: set[int]) -> int:
     """The real move that is ``m`` renamed by ``tau`` and leads to ``child``: same agent,
     kind and cost, the renamed action and atoms told, preferably the renamed label."""
-    op = sym.task_map(tau).get(move.op, move.op) if move.op >= 0 else move.op
+    op = sym.task_image(tau, move.op) if move.op >= 0 else move.op
     atoms = sym.state(tau, move.atoms)
     found = -1
     label = sym.label(tau, move.label)

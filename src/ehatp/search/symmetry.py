@@ -36,7 +36,7 @@ from __future__ import annotations
 import re
 import warnings
 from collections import Counter
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from itertools import combinations
 from typing import Any
 
@@ -87,10 +87,6 @@ def _split(name: str) -> tuple[str, tuple[str, ...], str]:
     return head, args, suffix
 
 
-def _join(head: str, args: Sequence[str], suffix: str) -> str:
-    return (f"{head}({', '.join(args)})" if args else head) + suffix
-
-
 class NotSymmetric(Exception):
     """A renaming that is not an automorphism of the ground problem."""
 
@@ -112,29 +108,41 @@ class Symmetry:
         self.perms: list[Perm] = [tuple(range(n))]
         self._pid: dict[Perm, int] = {self.perms[0]: 0}
         self._atom_maps: dict[int, dict[int, int]] = {}
-        self._moving: dict[int, int] = {}  # renaming -> the atoms it moves, as a mask
         self._task_maps: dict[int, dict[int, int]] = {}
+        self._moving: dict[int, int] = {}  # renaming -> the atoms it moves, as a mask
         self._inverse: dict[int, int] = {0: 0}
-        # atoms and tasks naming a movable object, with each object's role in them
+        # atoms and tasks naming a movable object: each object's role in them, and each as
+        # an integer key (:meth:`_key`), by which a renaming finds its image without text
         self.movable_mask = 0
-        self._atom_parts: dict[int, tuple[str, tuple[str, ...], str]] = {}
+        self._codes: dict[str, int] = {}  # names and heads other than movable objects -> n + i
         self._atom_roles: dict[int, tuple[tuple[int, int], ...]] = {}
+        self._atom_keys: dict[int, tuple[int, ...]] = {}
+        self._atom_of_key: dict[tuple[int, ...], int] = {}
+        self._object_atoms = [0] * n  # per movable object, the atoms naming it, as a mask
         roles: dict[tuple[Any, ...], int] = {}
         for i, a in enumerate(grounded.atoms):
             parts = _split(a)
             roles_i = self._roles(parts, roles)
             if roles_i:
                 self.movable_mask |= 1 << i
-                self._atom_parts[i] = parts
                 self._atom_roles[i] = roles_i
-        self._task_parts: dict[int, tuple[str, tuple[str, ...], str]] = {}
+                key = self._atom_keys[i] = self._key(parts)
+                self._atom_of_key[key] = i
+                for o, _ in roles_i:
+                    self._object_atoms[o] |= 1 << i
         self._task_roles: dict[int, tuple[tuple[int, int], ...]] = {}
+        self._task_keys: dict[int, tuple[int, ...]] = {}
+        self._task_of_key: dict[tuple[int, ...], int] = {}
         for t, name in enumerate(grounded.task_names):
             parts = _split(name)
             roles_t = self._roles(parts, roles)
             if roles_t:
-                self._task_parts[t] = parts
                 self._task_roles[t] = roles_t
+                key = self._task_keys[t] = self._key(parts)
+                self._task_of_key[key] = t
+        # renaming -> atom (task) -> its image, filled as renamings are applied
+        self._atom_images: dict[int, dict[int, int]] = {}
+        self._task_images: dict[int, dict[int, int]] = {}
         self._ag_sig: dict[Agenda, tuple[tuple[tuple[int, int], ...], ...]] = {}
         self._renamed: dict[int, dict[int, int]] = {}  # renaming -> state -> its image
         self._renamed_count = 0
@@ -199,38 +207,79 @@ class Symmetry:
         p = self.perms[pid]
         return {self.objects[i]: self.objects[j] for i, j in enumerate(p) if i != j}
 
-    def _name_map(self, parts: tuple[str, tuple[str, ...], str], ren: dict[str, str]) -> str:
+    def _key(self, parts: tuple[str, tuple[str, ...], str]) -> tuple[int, ...]:
+        """An atom's or task's name as integers: its head (with a state variable's ``=``),
+        then its arguments (and value), a movable object by its index, any other name by a
+        code of its own (``n + i``), so that a renaming maps a key onto its image's key by
+        reading the permutation alone."""
         head, args, suffix = parts
+        names = list(args)
         if suffix.startswith(" = "):
-            v = suffix[3:]
-            suffix = " = " + ren.get(v, v)
-        return _join(head, [ren.get(a, a) for a in args], suffix)
+            names.append(suffix[3:])
+            suffix = " = "
+        codes, index, n = self._codes, self.index, len(self.objects)
+        out = [codes.setdefault(f"{head}\x00{suffix}", n + len(codes))]
+        for x in names:
+            i = index.get(x)
+            out.append(i if i is not None else codes.setdefault(x, n + len(codes)))
+        return tuple(out)
+
+    def _renamed_key(self, pid: int, key: tuple[int, ...]) -> tuple[int, ...]:
+        p, n = self.perms[pid], len(self.objects)
+        return tuple([p[x] if x < n else x for x in key])
+
+    def atom_image(self, pid: int, i: int) -> int:
+        """The image of atom ``i`` under ``pid`` (an integer table per renaming, filled as
+        atoms are renamed; an atom naming no movable object is its own)."""
+        images = self._atom_images.get(pid)
+        if images is None:
+            images = self._atom_images[pid] = {}
+        j = images.get(i)
+        if j is None:
+            key = self._atom_keys.get(i)
+            j = images[i] = i if key is None else self._atom_of_key[self._renamed_key(pid, key)]
+        return j
+
+    def task_image(self, pid: int, t: int) -> int:
+        """The image of task ``t`` under ``pid`` (as :meth:`atom_image`; a task grounded
+        after the reduction was set up, or naming no movable object, is its own)."""
+        images = self._task_images.get(pid)
+        if images is None:
+            images = self._task_images[pid] = {}
+        u = images.get(t)
+        if u is None:
+            key = self._task_keys.get(t)
+            if key is None:
+                u = t
+            else:
+                u = self._task_of_key.get(self._renamed_key(pid, key))
+                if u is None:
+                    raise NotSymmetric(f"task {self.grounded.task_names[t]} has no image")
+            images[t] = u
+        return u
 
     def atom_map(self, pid: int) -> dict[int, int]:
         """Atom index -> its image under ``pid`` (moved atoms only); KeyError when an image
         is no atom (detection turns that into "not an automorphism")."""
         amap = self._atom_maps.get(pid)
         if amap is None:
-            ren = self.rename(pid)
-            idx = self.grounded.atom_index
+            of_key = self._atom_of_key
             amap = {}
-            for i, parts in self._atom_parts.items():
-                j = idx[self._name_map(parts, ren)]
+            for i, key in self._atom_keys.items():
+                j = of_key[self._renamed_key(pid, key)]
                 if j != i:
                     amap[i] = j
             self._atom_maps[pid] = amap
         return amap
 
     def task_map(self, pid: int) -> dict[int, int]:
+        """Task id -> its image under ``pid`` (moved tasks only); NotSymmetric when an image
+        is no task."""
         tmap = self._task_maps.get(pid)
         if tmap is None:
-            ren = self.rename(pid)
-            idx = self.grounded.task_index
             tmap = {}
-            for t, parts in self._task_parts.items():
-                u = idx.get(self._name_map(parts, ren))
-                if u is None:
-                    raise NotSymmetric(f"task {self.grounded.task_names[t]} has no image")
+            for t in self._task_keys:
+                u = self.task_image(pid, t)
                 if u != t:
                     tmap[t] = u
             self._task_maps[pid] = tmap
@@ -263,12 +312,15 @@ class Symmetry:
     def moving(self, pid: int) -> int:
         """The atoms ``pid`` moves (to another atom), as a mask: a state without any is its
         own image. A canonical renaming often swaps a few objects of many, so this is a
-        small part of the atoms naming interchangeable objects."""
+        small part of the atoms naming interchangeable objects. An atom naming an object
+        ``pid`` moves is moved (that argument changes), and only those are."""
         m = self._moving.get(pid)
         if m is None:
             m = 0
-            for i in self.atom_map(pid):
-                m |= 1 << i
+            atoms = self._object_atoms
+            for i, j in enumerate(self.perms[pid]):
+                if i != j:
+                    m |= atoms[i]
             self._moving[pid] = m
         return m
 
@@ -288,11 +340,11 @@ class Symmetry:
     def _rename_state(self, pid: int, s: int, moved: int) -> int:
         """:meth:`state`, computed: each atom of ``s`` that ``pid`` moves (``moved``, the
         part of ``s`` in :meth:`moving`) taken to its image."""
-        amap = self.atom_map(pid)
+        image = self.atom_image
         out = s & ~self.moving(pid)
         while moved:
             low = moved & -moved
-            out |= 1 << amap[low.bit_length() - 1]
+            out |= 1 << image(pid, low.bit_length() - 1)
             moved ^= low
         return out
 
@@ -310,11 +362,11 @@ class Symmetry:
 
     def _rename_agenda(self, pid: int, ag: Agenda) -> Agenda:
         """:meth:`agenda`, computed."""
-        tmap = self.task_map(pid)
+        image = self.task_image
         out: list[int] = []
         for t in ag:  # no blocks: partial order turns the reduction off (detect)
             assert isinstance(t, int)
-            out.append(tmap.get(t, t))
+            out.append(image(pid, t))
         return tuple(out)
 
     def worlds(self, pid: int, ws: Worlds) -> Worlds:
