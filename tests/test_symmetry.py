@@ -82,6 +82,34 @@ def test_partial_order_turns_the_reduction_off() -> None:
     assert detect(ground_problem(load(ROOT / "examples/cooking/cooking1.toml"))) is None
 
 
+def _tidy(special: bool) -> Problem:
+    """Two items alike in every fact; with ``special`` the robot's one task also has a
+    method, binding nothing, that names item ``a`` alone."""
+    from ehatp import Domain, Var
+    from ehatp.model.problem import BeliefWorld
+
+    d = Domain("tidy")
+    item = d.type("item")
+    x = Var("x", item)
+    loose = d.predicate("loose", x)
+    r = d.robot
+    put = r.action("put", x, pre=loose(x), effects=[~loose(x)])
+    tidy = r.task("tidy")
+    r.method(tidy, "any", params=[x], pre=loose(x), subtasks=[put(x)])
+    if special:
+        r.method(tidy, "first", params=[], pre=loose("a"), subtasks=[put("a")])
+    return Problem(name="tidy", domain=d, objects={"item": ["a", "b"]},
+                   init=frozenset({("loose", ("a",)), ("loose", ("b",))}),
+                   robot_agenda=(("tidy", ()),), human_agenda=(), beliefs=(BeliefWorld(),))
+
+
+def test_a_method_naming_one_object_alone_keeps_it_apart() -> None:
+    # the task tidy names no item, so the swap of a and b keeps it; its methods must then
+    # map onto themselves: "any" does (put(a) <-> put(b)), "first" (put(a) only) does not
+    assert classes(_tidy(False)) == [["a", "b"]]
+    assert classes(_tidy(True)) == []
+
+
 def _swap(sym: Symmetry, a: str, b: str) -> int:
     p = list(range(len(sym.objects)))
     i, j = sym.index[a], sym.index[b]
@@ -118,6 +146,30 @@ def test_apply_and_inverse() -> None:
     other = sym.apply(s, es)
     assert other.true >> g.atom_index["in(c2, box2)"] & 1
     assert sym.apply(sym.inverse(s), other) == es
+
+
+@pytest.mark.parametrize("domain", ["", VARIABLES])
+def test_a_renamed_atom_or_task_is_the_one_its_name_renamed_names(domain: str) -> None:
+    # the integer tables against the text: every object in a name replaced by its image
+    sym = detect(ground_problem(grid(4, 2, 2, domain=domain)))
+    assert sym is not None
+    g = sym.g
+    pid = sym.compose(sym.compose(_swap(sym, "c1", "c2"), _swap(sym, "box1", "box2")),
+                      _swap(sym, "c3", "c4"))
+    ren = {"c1": "c2", "c2": "c1", "box1": "box2", "box2": "box1", "c3": "c4", "c4": "c3"}
+
+    def renamed(name: str) -> str:
+        return re.sub(r"\w+", lambda m: ren.get(m[0], m[0]), name)
+
+    moved = 0
+    for i, atom in enumerate(g.atoms):
+        assert g.atoms[sym.atom_image(pid, i)] == renamed(atom)
+        assert (sym.moving(pid) >> i & 1) == (renamed(atom) != atom)
+        moved += renamed(atom) != atom
+    for t, task in enumerate(g.task_names):
+        assert g.task_names[sym.task_image(pid, t)] == renamed(task)
+    assert moved and sym.atom_map(pid) == {i: sym.atom_image(pid, i) for i in range(len(g.atoms))
+                                           if sym.atom_image(pid, i) != i}
 
 
 @pytest.mark.parametrize("example", EXAMPLES, ids=str)
