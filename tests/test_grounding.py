@@ -125,3 +125,50 @@ def test_the_random_generator_draws_grounding_on_demand() -> None:
     lazy = [seed for seed, a in enumerate(drawn) if a == 0][:20]
     outcomes = [agreement.check(seed, determinism=True) for seed in lazy]
     assert not [o for o in outcomes if o.failed], [o for o in outcomes if o.failed]
+
+
+def _turn_problem() -> Problem:
+    """``go(a)`` has one method, binding ``b``, ``p`` and ``d`` in that order: ``next(a, b,
+    d)`` is static, ``here(p)`` fluent (``step`` moves it)."""
+    d = Domain("turns")
+    Loc, Dir = d.type("loc"), d.type("dir")
+    a, b, p, x = Var("a", Loc), Var("b", Loc), Var("p", Loc), Var("d", Dir)
+    nxt = d.predicate("next", a, b, x)
+    here = d.predicate("here", p)
+    r = d.robot
+    step = r.action("step", a, b, pre=here(a), effects=[~here(a), here(b)])
+    go = r.task("go", a)
+    r.method(go, "turn", params=[b, p, x], pre=nxt(a, b, x) & here(p), subtasks=[step(p, b)])
+    init = {("here", ("l0",)), ("next", ("l0", "l1", "n")), ("next", ("l1", "l2", "e"))}
+    return Problem(name="turns", domain=d, objects={"loc": ["l0", "l1", "l2"],
+                                                    "dir": ["n", "e"]},
+                   init=frozenset(init), robot_agenda=(("go", ("l0",)),), human_agenda=(),
+                   beliefs=(BeliefWorld(),))
+
+
+def test_a_static_atom_narrows_each_parameter_it_names_and_a_fluent_one_none() -> None:
+    """Derived by hand: ``b`` takes the values a fact ``next(l0, b, _)`` has (l1 alone, the
+    direction projected out); ``p`` every location, ``here(p)`` ruling nothing out before
+    any action; ``d`` the directions of ``next(l0, l1, d)`` (n). So 1 + 3 + 3 values are
+    tried, where reading ``next`` only at ``d`` would try 3 + 9 + 3."""
+    from ehatp.model.bindings import Facts, binding_plan, bindings
+
+    prob = _turn_problem()
+    g = ground_problem(prob)
+    got = [m.name for m in g.robot.methods[g.task_index["go(l0)"]]]
+    assert got == ["go.turn(l1, l0, n)", "go.turn(l1, l1, n)", "go.turn(l1, l2, n)"]
+    method = prob.domain.robot.methods[0]
+    a = method.task.params[0]
+    tried = 0
+
+    def met() -> None:
+        nonlocal tried
+        tried += 1
+
+    objects = prob.all_objects()
+    facts = Facts(prob.init, {"next": 3, "here": 1}, objects)
+    plan = binding_plan(method, {a}, {"next"}, lambda c: "here" in str(c))
+    assert plan[0] == [[], [], [], []]  # no conjunct is read: next offers, here is fluent
+    out = bindings(method, {a: "l0"}, plan, facts, lambda f, b: f, met)
+    assert out == [("l1", "l0", "n"), ("l1", "l1", "n"), ("l1", "l2", "n")]
+    assert tried == 7

@@ -6,12 +6,13 @@ order are canonical: the planner's output does not depend on declaration order.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from fractions import Fraction
 from math import prod
 from typing import Any, TypeVar
 
 from ..errors import DomainError
+from .bindings import Facts, Plan, binding_plan, bindings
 from .domain import (
     AgentModel,
     Assign,
@@ -35,10 +36,8 @@ from .formula import (
     GTest,
     Not,
     StateFn,
-    Term,
     Var,
     compile_ground,
-    free_vars,
     ground,
     product,
     simplify_and,
@@ -86,7 +85,8 @@ class _Grounder:
         self.task_names: list[str] = []
         self.task_index: dict[str, int] = {}
         self._derived: dict[tuple[str, tuple[str, ...]], Formula] = {}
-        self._offer: dict[_Gen, dict[tuple[str, ...], frozenset[str]]] = {}
+        self.facts = Facts(problem.init, {n: len(x.params) for n, x in self.d.predicates.items()},
+                           self.objects)
         self._subtasks_ok: set[tuple[int, str, tuple[str, ...]]] = set()  # (model, call)
 
     def run(self) -> Grounded:
@@ -307,11 +307,16 @@ class _Grounder:
             fn = self.fns[f] = compile_ground(f)
         return fn
 
-    def atom(self, pred: str, args: tuple[str, ...]) -> Formula:
+    def met(self) -> None:
+        """One more atom or binding met while grounding ahead: every 1024, the limit is
+        looked at (on demand, only between tasks)."""
         if self._ahead:
             self._atoms_met += 1
             if not self._atoms_met & 1023:
                 self.check()
+
+    def atom(self, pred: str, args: tuple[str, ...]) -> Formula:
+        self.met()
         if pred in self.d.counters:  # balls(b1, 2), the value view: balls(b1) = 2
             c = self.d.counters[pred]
             if len(args) != len(c.params) + 1 or not args[-1].isdigit():
@@ -372,22 +377,26 @@ class _Grounder:
         body = value_in(digits, {v for v in range(c.max + 1) if test.holds(v)}, c.max)
         return body if body in (TRUE, FALSE) else GTest(body, str(test))
 
-    def offers(self, gen: _Gen) -> dict[tuple[str, ...], frozenset[str]]:
-        """For the static or shrinking atom of ``gen``: the values its free variable takes in
-        the initial state's facts, by the values of its other arguments (built once)."""
-        index = self._offer.get(gen)
-        if index is None:
-            pred, at_v, fixed, terms = gen
-            found: dict[tuple[str, ...], set[str]] = {}
-            for n, fact in self.p.init:
-                if n == pred and len(fact) == len(at_v) + len(fixed) and \
-                        len({fact[k] for k in at_v}) == 1:
-                    found.setdefault(tuple(fact[k] for k in fixed), set()).add(fact[at_v[0]])
-            self._offer[gen] = index = {k: frozenset(x) for k, x in found.items()}
-        return index
-
     def ground_f(self, f: Formula, binding: Mapping[Var, str]) -> Formula:
         return ground(f, binding, self.objects, self.atom, self.compare)
+
+    def never_false(self, c: Formula) -> bool:
+        """Whether ``c`` grounds to a fluent atom or its negation for every binding of its
+        variables by objects of their types, never to FALSE (§1, "Grounding": only static and
+        shrinking atoms are read off the initial state): a literal of a predicate an effect
+        both adds and deletes, its arguments variables of a type the predicate takes. Such a
+        conjunct cannot rule out a method's binding, so binding it need not read it."""
+        a = c.arg if isinstance(c, Not) else c
+        if type(a) is not Atom:
+            return False
+        d = self.d
+        decl = d.predicates.get(a.pred)
+        if decl is None or a.pred in self.static or a.pred in self.shrinking \
+                or a.pred in d.derived_predicates or a.pred in d.variables \
+                or a.pred in d.counters or len(a.args) != len(decl.params):
+            return False
+        return all(isinstance(x, Var) and d.is_subtype(x.type, v.type)
+                   for x, v in zip(a.args, decl.params, strict=True))
 
     def shown(self, f: Formula, binding: Mapping[Var, str]) -> Formula:
         """Ground ``f`` and remember how each conjunct reads in the domain's vocabulary."""
@@ -588,7 +597,7 @@ class _ModelGrounding:
         for ms in self.methods_of.values():
             ms.sort(key=lambda method: method.name)
         self.pending: set[int] | None = None  # on demand: reached, not yet grounded
-        self._checks: dict[Method, tuple[list[list[Formula]], list[list[_Gen]]]] = {}
+        self._plans: dict[Method, Plan] = {}
 
     def mention(self, t: int, call: tuple[str, tuple[str, ...]] | None = None) -> None:
         """Task ``t`` is reached: ground it later (ahead, or on demand)."""
@@ -629,46 +638,6 @@ class _ModelGrounding:
         self.pending.discard(t)
         self.g.asked += 1
 
-    def bindings(self, method: Method, tb: dict[Var, str]) -> Iterator[tuple[str, ...]]:
-        """§1: the bindings of ``m``'s own parameters, in the order of the product of their
-        types' objects, without those a conjunct of ``m``'s precondition folds to false for.
-        Each conjunct is read as soon as its variables are bound, and a positive static
-        literal such as ``neighbour(?l1, ?l2)`` offers only the values the initial state
-        gives it (an index of the facts), so a static relation cuts the enumeration short."""
-        gr = self.gr
-        plan = self._checks.get(method)
-        if plan is None:
-            plan = self._checks[method] = _binding_plan(method, set(tb), gr.factual)
-        checks, gens = plan
-        b = dict(tb)
-        if any(gr.ground_f(c, b) == FALSE for c in checks[0]):
-            return
-        params = method.params
-        domains = [gr.objects[v.type] for v in params]
-        n = len(params)
-        vals: list[str] = []
-
-        def go(i: int) -> Iterator[tuple[str, ...]]:
-            if i == n:
-                yield tuple(vals)
-                return
-            v = params[i]
-            domain: Iterable[str] = domains[i]
-            for gen in gens[i + 1]:
-                want = tuple(b[a] if isinstance(a, Var) else a for a in gen[3])
-                offered = gr.offers(gen).get(want, _NONE)
-                domain = [o for o in domain if o in offered]
-            for o in domain:
-                b[v] = o
-                cs = checks[i + 1]
-                if not cs or all(gr.ground_f(c, b) != FALSE for c in cs):
-                    vals.append(o)
-                    yield from go(i + 1)
-                    vals.pop()
-            b.pop(v, None)
-
-        yield from go(0)
-
     def one(self, t: int) -> None:
         """Ground task ``t``, mentioning the subtasks its methods reach."""
         gr, g, model = self.gr, self.g, self.model
@@ -701,7 +670,11 @@ class _ModelGrounding:
             g.done[t] = (df, gr.compile(df))
         gms = []
         for method in self.methods_of.get(name, []):
-            for vals in self.bindings(method, tb):
+            plan = self._plans.get(method)
+            if plan is None:
+                plan = self._plans[method] = binding_plan(method, set(tb), gr.factual,
+                                                          gr.never_false)
+            for vals in bindings(method, tb, plan, gr.facts, gr.ground_f, gr.met):
                 b = {**tb, **dict(zip(method.params, vals, strict=True))}
                 pre_f = gr.shown(method.pre, b)
                 if pre_f == FALSE:
@@ -717,42 +690,6 @@ class _ModelGrounding:
                 gms.append(GMethod(f"{name}.{label}", pre_f, gr.compile(pre_f),
                                    tuple(subs), method.predecessors()))
         g.methods[t] = tuple(gms)
-
-
-_Gen = tuple[str, tuple[int, ...], tuple[int, ...], tuple[Term, ...]]
-"""A positive static or shrinking atom offering the values of one variable: (predicate, the
-variable's positions, the other positions, the terms at those)."""
-_NONE: frozenset[str] = frozenset()
-
-
-def _binding_plan(method: Method, bound: set[Var], factual: set[str]
-                  ) -> tuple[list[list[Formula]], list[list[_Gen]]]:
-    """How to enumerate ``m``'s own parameters: the conjuncts of its precondition by the
-    parameter that binds their last variable (entry 0: those the task's arguments bind; entry
-    i + 1: those bound with ``m.params[i]``; a conjunct with any other variable is left to the
-    whole precondition). A positive literal of a ``factual`` predicate (static, or shrinking:
-    true only where the initial state says so) offers that parameter's values instead of
-    being read for each."""
-    parts = list(method.pre.args) if isinstance(method.pre, And) else [method.pre]
-    checks: list[list[Formula]] = [[] for _ in range(len(method.params) + 1)]
-    gens: list[list[_Gen]] = [[] for _ in range(len(method.params) + 1)]
-    where = {v: i + 1 for i, v in enumerate(method.params)}
-    for c in parts:
-        try:
-            vs = free_vars(c)
-        except TypeError:  # a constant: the whole precondition reads it
-            continue
-        if any(v not in where and v not in bound for v in vs):
-            continue
-        at = max((where.get(v, 0) for v in vs), default=0)
-        if at and type(c) is Atom and c.pred in factual:
-            v = method.params[at - 1]
-            at_v = tuple(k for k, a in enumerate(c.args) if a == v)
-            fixed = tuple(k for k, a in enumerate(c.args) if a != v)
-            gens[at].append((c.pred, at_v, fixed, tuple(c.args[k] for k in fixed)))
-        else:
-            checks[at].append(c)
-    return checks, gens
 
 
 def _exact(c: int | float) -> Cost:
