@@ -564,7 +564,8 @@ class Rules:
         return out
 
     def text(self, f: Formula) -> str:
-        return self.grounded.display.get(f, str(f))
+        r = self.grounded.reading(f)
+        return r if r is not None else str(f)
 
     def human_options(self, es: EState) -> list[Step]:
         """§4 (Human): the options of every hypothesis of A_H (certain actions, asks while

@@ -624,9 +624,9 @@ class Semantics:
     def show(self, f: Formula) -> str:
         """§4: a formula as the domain wrote it (derived predicates by name), for ``ask`` labels."""
         parts = f.args if isinstance(f, And) else (f,)
-        shown = self.grounded.display
-        # str() of a formula is costly: only when the domain gave no display name
-        return " and ".join(d if (d := shown.get(p)) is not None else str(p) for p in parts)
+        reading = self.grounded.reading
+        # str() of a formula is costly: only when the domain gave no reading
+        return " and ".join(d if (d := reading(p)) is not None else str(p) for p in parts)
 
     def ask(self, es: EState, phi: Formula) -> EState:
         """§5: the robot answers ``ask(phi)`` truthfully: the worlds where ``phi`` differs from T

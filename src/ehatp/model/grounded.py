@@ -6,10 +6,10 @@ Built by :func:`~ehatp.model.grounding.ground_problem`; data and lookups only.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, MutableMapping
+from collections.abc import Iterable, Mapping, MutableMapping
 from dataclasses import dataclass, field
 
-from .formula import Formula, StateFn, compile_ground
+from .formula import Formula, StateFn, Var, compile_ground, substitute
 from .problem import Cost, Problem
 
 FINISH = -1
@@ -107,7 +107,9 @@ class Grounded:
     goal_f: Formula
     goal: StateFn
     fns: dict[Formula, StateFn]
-    display: dict[Formula, str]
+    # ground formula -> the formula the domain wrote and its binding, read as text only when
+    # a label or a message shows it (:meth:`reading`; most are never shown)
+    written: dict[Formula, tuple[Formula, Mapping[Var, str]]]
     # finite-domain variables (one-hot: one bit per value, exactly one set) and counters
     # (binary: one bit per power of two), each a *unit* of several bits (docs/semantics.md §2)
     var_units: tuple[int, ...] = ()
@@ -116,6 +118,18 @@ class Grounded:
     counter_max: dict[int, int] = field(default_factory=dict)  # counter mask -> max
     multi_mask: int = 0  # the bits of every variable and counter
     unit_of: dict[int, int] = field(default_factory=dict)  # bit index -> its unit's mask
+    readings: dict[Formula, str] = field(default_factory=dict)  # :meth:`reading`'s, kept
+
+    def reading(self, f: Formula) -> str | None:
+        """Return the ground formula ``f`` as the domain wrote it (derived predicates by
+        name; remembered), or None when grounding met it only inside another formula."""
+        r = self.readings.get(f)
+        if r is None:
+            w = self.written.get(f)
+            if w is None:
+                return None
+            r = self.readings[f] = str(substitute(w[0], w[1]))
+        return r
 
     def compile(self, f: Formula) -> StateFn:
         fn = self.fns.get(f)

@@ -41,7 +41,6 @@ from .formula import (
     ground,
     product,
     simplify_and,
-    substitute,
     value_in,
 )
 from .grounded import FINISH, GMethod, GModel, GOp, Grounded, _low, bits, no_check
@@ -80,8 +79,9 @@ class _Grounder:
         self.obj_type = {**self.d.constants,
                          **{o: t for t, os in problem.objects.items() for o in os}}
         self.fns: dict[Formula, StateFn] = {}
-        # ground formula -> how the domain wrote it (derived predicates kept by name)
-        self.display: dict[Formula, str] = {}
+        # ground formula -> how the domain wrote it (derived predicates kept by name), with
+        # its binding
+        self.written: dict[Formula, tuple[Formula, Mapping[Var, str]]] = {}
         self.task_names: list[str] = []
         self.task_index: dict[str, int] = {}
         self._derived: dict[tuple[str, tuple[str, ...]], Formula] = {}
@@ -122,7 +122,7 @@ class _Grounder:
             robot_seen_by_human=rh, init=init, beliefs=beliefs, robot_agenda=r_ag,
             human_agenda=h_ag, visible=visible, observable_mask=obs, inferable_mask=inf,
             hidden_mask=hid, copresent_f=cop_f, copresent=self.compile(cop_f), goal_f=goal_f,
-            goal=self.compile(goal_f), fns=self.fns, display=self.display,
+            goal=self.compile(goal_f), fns=self.fns, written=self.written,
             var_units=tuple(mask for k, _, mask, _ in units if k == "variable"),
             counter_units=tuple(mask for k, _, mask, _ in units if k == "counter"),
             unit_names={mask: head for _, head, mask, _ in units},
@@ -399,22 +399,23 @@ class _Grounder:
                    for x, v in zip(a.args, decl.params, strict=True))
 
     def shown(self, f: Formula, binding: Mapping[Var, str]) -> Formula:
-        """Ground ``f`` and remember how each conjunct reads in the domain's vocabulary."""
-        display = self.display
+        """Ground ``f`` and remember how each conjunct reads in the domain's vocabulary: as
+        written, with its binding, made text only if shown (``Grounded.reading``)."""
+        written = self.written
         if not isinstance(f, And):
             g = self.ground_f(f, binding)
-            if g not in display:
-                display[g] = str(substitute(f, binding))
+            if g not in written:
+                written[g] = (f, binding)
             return g
         # each conjunct grounded once: the conjunction is their simplified And (as ground()
         # makes it), and each keeps its own reading too
         parts = [(part, self.ground_f(part, binding)) for part in f.args]
         g = simplify_and([gp for _, gp in parts])
-        if g not in display:
-            display[g] = str(substitute(f, binding))
+        if g not in written:
+            written[g] = (f, binding)
         for part, gp in parts:
-            if gp not in display:
-                display[gp] = str(substitute(part, binding))
+            if gp not in written:
+                written[gp] = (part, binding)
         return g
 
     # -- tasks --
