@@ -87,6 +87,14 @@ def _split(name: str) -> tuple[str, tuple[str, ...], str]:
     return head, args, suffix
 
 
+def _table(tables: dict[int, dict[int, int]], pid: int) -> dict[int, int]:
+    """Return renaming ``pid``'s table in ``tables``, made empty the first time."""
+    r = tables.get(pid)
+    if r is None:
+        r = tables[pid] = {}
+    return r
+
+
 class NotSymmetric(Exception):
     """A renaming that is not an automorphism of the ground problem."""
 
@@ -231,9 +239,7 @@ class Symmetry:
     def atom_image(self, pid: int, i: int) -> int:
         """The image of atom ``i`` under ``pid`` (an integer table per renaming, filled as
         atoms are renamed; an atom naming no movable object is its own)."""
-        images = self._atom_images.get(pid)
-        if images is None:
-            images = self._atom_images[pid] = {}
+        images = _table(self._atom_images, pid)
         j = images.get(i)
         if j is None:
             key = self._atom_keys.get(i)
@@ -243,9 +249,7 @@ class Symmetry:
     def task_image(self, pid: int, t: int) -> int:
         """The image of task ``t`` under ``pid`` (as :meth:`atom_image`; a task grounded
         after the reduction was set up, or naming no movable object, is its own)."""
-        images = self._task_images.get(pid)
-        if images is None:
-            images = self._task_images[pid] = {}
+        images = _table(self._task_images, pid)
         u = images.get(t)
         if u is None:
             key = self._task_keys.get(t)
