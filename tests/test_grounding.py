@@ -9,6 +9,8 @@ from itertools import product
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import ehatp
 from ehatp import Domain, InputError, Problem, Var
@@ -172,3 +174,71 @@ def test_a_static_atom_narrows_each_parameter_it_names_and_a_fluent_one_none() -
     out = bindings(method, {a: "l0"}, plan, facts, lambda f, b: f, met)
     assert out == [("l1", "l0", "n"), ("l1", "l1", "n"), ("l1", "l2", "n")]
     assert tried == 7
+
+
+_LOCS = ["l0", "l1", "l2", "l3"]
+_FACTS = [(x, y) for x in _LOCS for y in _LOCS]
+
+
+@settings(max_examples=150, deadline=None, derandomize=True)
+@given(link=st.sets(st.sampled_from(_FACTS), max_size=10),
+       three=st.sets(st.tuples(st.sampled_from(_LOCS), st.sampled_from(_LOCS),
+                               st.sampled_from(_LOCS)), max_size=10),
+       shape=st.lists(st.tuples(st.sampled_from(["link", "three", "not-link", "here",
+                                                 "not-here", "eq"]),
+                                st.lists(st.integers(0, 3), min_size=3, max_size=3)),
+                      min_size=1, max_size=4))
+def test_bindings_are_the_product_without_what_a_conjunct_folds_to_false(
+        link: set[tuple[str, str]], three: set[tuple[str, str, str]],
+        shape: list[tuple[str, list[int]]]) -> None:
+    """The bindings of a method with three parameters ``x``, ``y``, ``z`` (task argument
+    ``a``) are, by definition (§1, "Grounding"), the product of their types' objects in order
+    without every tuple for which some conjunct of the precondition grounds to false; the
+    enumeration that narrows by static facts and leaves fluent literals out must give exactly
+    those, on random static relations and preconditions."""
+    from ehatp.model.bindings import binding_plan, bindings
+    from ehatp.model.formula import FALSE, And, Formula, conj, eq
+    from ehatp.model.grounding import _Grounder
+
+    d = Domain("rand")
+    Loc = d.type("loc")
+    a, x, y, z = (Var(n, Loc) for n in "axyz")
+    terms = [a, x, y, z]
+    lk = d.predicate("link", a, x)
+    th = d.predicate("three", a, x, y)
+    here = d.predicate("here", a)
+    r = d.robot
+    step = r.action("step", a, x, pre=here(a), effects=[~here(a), here(x)])
+    parts: list[Formula] = []
+    for kind, ix in shape:
+        u, v, w = (terms[i] for i in ix)
+        if kind == "link":
+            parts.append(lk(u, v))
+        elif kind == "three":
+            parts.append(th(u, v, w))
+        elif kind == "not-link":
+            parts.append(~lk(u, v))
+        elif kind == "here":
+            parts.append(here(u))
+        elif kind == "not-here":
+            parts.append(~here(u))
+        else:
+            parts.append(eq(u, v))
+    pre = conj(*parts)
+    go = r.task("go", a)
+    r.method(go, "m", params=[x, y, z], pre=pre, subtasks=[step(a, x)])
+    init = ({("here", ("l0",))} | {("link", f) for f in link} | {("three", f) for f in three})
+    prob = Problem(name="rand", domain=d, objects={"loc": _LOCS}, init=frozenset(init),
+                   robot_agenda=(("go", ("l0",)),), human_agenda=(), beliefs=(BeliefWorld(),))
+    gr = _Grounder(prob)
+    gr.run()
+    method = d.robot.methods[0]
+    plan = binding_plan(method, {a}, gr.factual, gr.never_false)
+    for start in _LOCS:
+        tb = {a: start}
+        got = bindings(method, tb, plan, gr.facts, gr.ground_f, lambda: None)
+        conjuncts = list(method.pre.args) if isinstance(method.pre, And) else [method.pre]
+        want = [vals for vals in product(_LOCS, repeat=3)
+                if all(gr.ground_f(c, {**tb, x: vals[0], y: vals[1], z: vals[2]}) != FALSE
+                       for c in conjuncts)]
+        assert got == want
