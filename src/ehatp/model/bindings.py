@@ -43,7 +43,7 @@ class Facts:
         self._positions: dict[str, dict[str, int]] = {}
 
     def offers(self, gen: Gen) -> dict[tuple[str, ...], frozenset[str]]:
-        """Return, for the static or shrinking atom of ``gen``, the values its variable takes
+        """§1: return, for the static or shrinking atom of ``gen``, the values its variable takes
         in the initial state's facts, by the values of its known arguments; an argument
         neither the variable nor known takes any value (it is projected out)."""
         index = self._offer.get(gen)

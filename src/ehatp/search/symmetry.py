@@ -237,8 +237,8 @@ class Symmetry:
         return tuple([p[x] if x < n else x for x in key])
 
     def atom_image(self, pid: int, i: int) -> int:
-        """The image of atom ``i`` under ``pid`` (an integer table per renaming, filled as
-        atoms are renamed; an atom naming no movable object is its own)."""
+        """§3: the image of atom ``i`` under ``pid`` (an integer table per renaming, filled
+        as atoms are renamed; an atom naming no movable object is its own)."""
         images = _table(self._atom_images, pid)
         j = images.get(i)
         if j is None:
@@ -247,7 +247,7 @@ class Symmetry:
         return j
 
     def task_image(self, pid: int, t: int) -> int:
-        """The image of task ``t`` under ``pid`` (as :meth:`atom_image`; a task grounded
+        """§3: the image of task ``t`` under ``pid`` (as :meth:`atom_image`; a task grounded
         after the reduction was set up, or naming no movable object, is its own)."""
         images = _table(self._task_images, pid)
         u = images.get(t)
