@@ -121,7 +121,10 @@ class _Checker:
             if isinstance(x, GOp):
                 m |= x.add | x.dele | _mask(x.done_f)
                 for c, a, d in x.cond:
-                    m |= a | d | _mask(self.formula_of.get(id(c)))
+                    form = self.formula_of.get(id(c))
+                    if form is None:  # as comparing it would say
+                        raise NotSymmetric("an uncompiled condition")
+                    m |= a | d | _mask(form)
             r = self._atoms[id(x)] = (x, m)
         return r[1]
 
