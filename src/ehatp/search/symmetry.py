@@ -267,10 +267,9 @@ class Symmetry:
         is no atom (detection turns that into "not an automorphism")."""
         amap = self._atom_maps.get(pid)
         if amap is None:
-            of_key = self._atom_of_key
             amap = {}
-            for i, key in self._atom_keys.items():
-                j = of_key[self._renamed_key(pid, key)]
+            for i in self._atom_keys:
+                j = self.atom_image(pid, i)
                 if j != i:
                     amap[i] = j
             self._atom_maps[pid] = amap
