@@ -1,7 +1,7 @@
 """Planner/validator agreement on random problems: solve, validate, execute, re-solve.
 
     .venv/bin/python benchmarks/agreement.py --n 10000 [--start SEED] [--jobs N] [--verbose]
-        [--no-symmetry] [--walk-cap N]
+        [--no-symmetry] [--world-classes] [--walk-cap N]
     .venv/bin/python benchmarks/agreement.py --show SEED      # print one seed's problem
 
 Solves the random problems of seeds start..start+n-1 (``ehatp.experiments.randomgen``), validates
@@ -18,7 +18,9 @@ counted apart (skipped). Prints every crash, disagreement, non-executable policy
 branch and relabelling that differs with its seed (and, in braces, the model options its
 problem sets away from the defaults), then the counts and the time taken; exits 1 if there is
 any of them. ``--no-symmetry`` solves without the symmetry
-reduction (docs/semantics.md §3), whatever the problems say.
+reduction (docs/semantics.md §3), whatever the problems say; ``--world-classes`` keeps the
+human's worlds as classes (docs/semantics.md §3, "Worlds as classes") and solves each problem
+again with them listed, expecting the same policy (its timings aside), states and ``|W|``.
 """
 
 from __future__ import annotations
@@ -49,6 +51,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="print the problem of SEED and what checking it gives, then exit")
     ap.add_argument("--no-symmetry", action="store_true",
                     help="search without the symmetry reduction (docs/semantics.md §3)")
+    ap.add_argument("--world-classes", action="store_true",
+                    help="keep the human's worlds as classes (issue 17 §2), and expect the "
+                         "policy solving with them listed gives")
     ap.add_argument("--walk-cap", type=int, default=agreement.WALK_CAP, metavar="N",
                     help="branches of a policy executed at most (default "
                          f"{agreement.WALK_CAP})")
@@ -62,7 +67,7 @@ def main(argv: list[str] | None = None) -> int:
     symmetry = False if args.no_symmetry else None  # None: as each problem says
 
     if args.show is not None:
-        return show(args.show, args.walk_cap, symmetry)
+        return show(args.show, args.walk_cap, symmetry, args.world_classes)
 
     seeds = range(args.start, args.start + args.n)
     tty = sys.stderr.isatty()
@@ -76,23 +81,27 @@ def main(argv: list[str] | None = None) -> int:
 
     t0 = time.perf_counter()
     outcomes = agreement.run(seeds, jobs=args.jobs, on_result=progress, walk_cap=args.walk_cap,
-                             symmetry=symmetry)
+                             symmetry=symmetry, world_classes=args.world_classes)
     elapsed = time.perf_counter() - t0
     if tty:
         print("\r\033[K", end="", file=sys.stderr, flush=True)
-    return report(outcomes, seeds, elapsed, args.jobs, args.walk_cap, args.verbose)
+    return report(outcomes, seeds, elapsed, args.jobs, args.walk_cap, args.verbose,
+                  args.world_classes)
 
 
-def show(seed: int, walk_cap: int, symmetry: bool | None) -> int:
+def show(seed: int, walk_cap: int, symmetry: bool | None, world_classes: bool = False) -> int:
     """Print the problem of ``seed`` and what checking it gives; return the exit code."""
     print(randomgen.draw(seed).describe())
-    o = agreement.check(seed, determinism=True, walk_cap=walk_cap, symmetry=symmetry)
+    o = agreement.check(seed, determinism=True, walk_cap=walk_cap, symmetry=symmetry,
+                        world_classes=world_classes)
     print(f"\n{o.kind} (planner: {o.status or '-'}) {o.detail}")
     if o.executed:
         print(f"executed: {o.branches} branch(es){' (capped)' if o.capped else ''}"
               + (f"; fails: {o.unexecutable}" if o.unexecutable else ", every one to the goal"))
     if o.hidden_choice:
         print(f"branches on a hidden choice: {o.hidden_choice}")
+    if o.classes_differ:
+        print(f"worlds as classes: {o.classes_differ}")
     if o.preferences:
         print(f"preference profiles: {o.relabelled} relabelled"
               + (f"; {o.relabel_differs}" if o.relabel_differs else
@@ -101,7 +110,7 @@ def show(seed: int, walk_cap: int, symmetry: bool | None) -> int:
 
 
 def report(outcomes: list[agreement.Outcome], seeds: range, elapsed: float, jobs: int,
-           walk_cap: int, verbose: bool) -> int:
+           walk_cap: int, verbose: bool, classes: bool = False) -> int:
     """Print every failing seed (every seed when ``verbose``), then the counts; return the
     exit code."""
     for o in outcomes:
@@ -119,6 +128,8 @@ def report(outcomes: list[agreement.Outcome], seeds: range, elapsed: float, jobs
                 print(f"  branches on a hidden choice: {o.hidden_choice}")
             if o.relabel_differs:
                 print(f"  relabelling: {o.relabel_differs}")
+            if o.classes_differ:
+                print(f"  worlds as classes: {o.classes_differ}")
     c = agreement.summary(outcomes)
     checked = sum(o.checked_determinism for o in outcomes)
     failures = sum(o.failed for o in outcomes)
@@ -138,9 +149,13 @@ def report(outcomes: list[agreement.Outcome], seeds: range, elapsed: float, jobs
     print(f"preference profiles: {c['preferences']} problems ({solved_prefs} solved), "
           f"{c['relabelled']} profiles relabelled and compared with a fresh solve, "
           f"relabellings that differ {c['relabel-differs']}")
+    if any(o.classes_differ for o in outcomes) or classes:
+        print(f"worlds as classes: policies that differ from the worlds listed "
+              f"{c['classes-differ']}")
     print("OK: planner and validator agree, every policy executes" if not failures else
           f"FAIL: {failures} seed(s) with a crash, disagreement, nondeterminism, "
-          f"non-executable policy, branch on a hidden choice or relabelling that differs "
+          f"non-executable policy, branch on a hidden choice, relabelling or classes that "
+          f"differ "
           f"({plain} with every model option at its default)")
     return 1 if failures else 0
 

@@ -72,11 +72,14 @@ class Outcome:
     preferences: bool = False
     relabelled: int = 0
     relabel_differs: str = ""
+    # worlds kept as classes (issue 17 §2): the solve was with them, and its policy is not
+    # the one solving with the worlds listed gives (what differs, first)
+    classes_differ: str = ""
 
     @property
     def failed(self) -> bool:
         return self.kind in FAILURES or bool(self.unexecutable or self.hidden_choice
-                                             or self.relabel_differs)
+                                             or self.relabel_differs or self.classes_differ)
 
 
 FAILURES = ("crash", "disagreement", "nondeterministic")
@@ -88,6 +91,9 @@ RELABELLING = ("preferences", "relabelled", "relabel-differs")
 """The counts of :func:`summary` for preference profiles (C11): problems with profiles,
 profiles relabelled on a kept graph, seeds where one differs from a fresh solve (or is
 invalid, or does not execute)."""
+CLASSES = ("classes-differ",)
+"""The count of :func:`summary` for a run with the worlds kept as classes: seeds whose
+policy (or status) differs from the one solving with the worlds listed gives."""
 
 
 def _where(e: BaseException) -> str:
@@ -154,12 +160,14 @@ def relabelled(prob: Problem, result: Result, *, max_states: int, timeout: float
 
 def check(seed: int, *, determinism: bool | None = None, max_states: int = MAX_STATES,
           timeout: float = TIMEOUT, walk_cap: int = WALK_CAP,
-          symmetry: bool | None = None) -> Outcome:
+          symmetry: bool | None = None, world_classes: bool = False) -> Outcome:
     """Solve the problem of ``seed``, validate any policy the planner returns, look in its file
     for a hidden choice and walk it on up to ``walk_cap`` branches through the Executor, and
     (when ``determinism``, by default for one seed in :data:`DETERMINISM_EVERY`) solve it again
-    and declared in reverse order, expecting byte-identical policy JSON. ``symmetry`` is
-    :func:`~ehatp.search.planner.solve`'s (None: as the problem says)."""
+    and declared in reverse order, expecting byte-identical policy JSON. ``symmetry`` and
+    ``world_classes`` are :func:`~ehatp.search.planner.solve`'s (None: as the problem says);
+    with ``world_classes`` the problem is also solved with the worlds listed, expecting the
+    same policy but for its timings (``classes_differ``)."""
     from ..check.validator import validate
     from ..run.walk import walk_policy
     from ..search.planner import solve
@@ -185,8 +193,13 @@ def check(seed: int, *, determinism: bool | None = None, max_states: int = MAX_S
         stage = "solve"
         prefs = prob.objective.kind == ObjectiveKind.PREFERENCES
         r = solve(prob, max_states=max_states, timeout=timeout, symmetry=symmetry,
-                  keep_graph=prefs)
+                  keep_graph=prefs, world_classes=world_classes)
         status = r.status
+        if world_classes:
+            stage = "listed worlds"
+            listed = solve(prob, max_states=max_states, timeout=timeout, symmetry=symmetry,
+                           keep_graph=prefs)
+            execution["classes_differ"] = _differ(r, listed)
         if r.policy is not None:
             # from the policy's file text (format v2), as a user's validate would read it
             text = r.policy.to_json()
@@ -198,7 +211,7 @@ def check(seed: int, *, determinism: bool | None = None, max_states: int = MAX_S
             stage = "walk"
             t0 = time.perf_counter()
             walk = walk_policy(prob, read, cap=walk_cap)
-            execution = {"executed": True, "branches": walk.branches, "capped": walk.capped,
+            execution |= {"executed": True, "branches": walk.branches, "capped": walk.capped,
                          "unexecutable": "" if walk.ok else walk.message.splitlines()[0],
                          "hidden_choice": "; ".join(hidden),
                          "walk_seconds": time.perf_counter() - t0}
@@ -233,12 +246,34 @@ def check(seed: int, *, determinism: bool | None = None, max_states: int = MAX_S
         return out("crash", f"{stage}: {_where(e)}")
 
 
+def _differ(a: Result, b: Result) -> str:
+    """What differs between two solves of one problem, their timings aside ("" if nothing):
+    the status, or the policy's JSON without its ``stats``, or the states searched."""
+    if a.status != b.status:
+        return f"status {a.status} vs {b.status}"
+    if a.policy is None or b.policy is None:
+        return "" if a.policy is b.policy else "one has a policy"
+    texts = []
+    for r in (a, b):
+        d = json.loads(r.policy.to_json())  # type: ignore[union-attr]
+        d.pop("stats", None)
+        texts.append(json.dumps(d, sort_keys=True))
+    if texts[0] != texts[1]:
+        return "the policies differ"
+    for key in ("distinct", "expanded", "max_worlds"):
+        if a.stats.get(key) != b.stats.get(key):
+            return f"{key} {a.stats.get(key)} vs {b.stats.get(key)}"
+    return ""
+
+
 def run(seeds: Iterable[int], *, jobs: int = 1,
         on_result: Callable[[Outcome], None] | None = None,
-        walk_cap: int = WALK_CAP, symmetry: bool | None = None) -> list[Outcome]:
-    """:func:`check` every seed (``walk_cap`` and ``symmetry`` as there), on ``jobs``
-    processes; the outcomes sorted by seed."""
-    one = functools.partial(check, walk_cap=walk_cap, symmetry=symmetry)
+        walk_cap: int = WALK_CAP, symmetry: bool | None = None,
+        world_classes: bool = False) -> list[Outcome]:
+    """:func:`check` every seed (``walk_cap``, ``symmetry`` and ``world_classes`` as there),
+    on ``jobs`` processes; the outcomes sorted by seed."""
+    one = functools.partial(check, walk_cap=walk_cap, symmetry=symmetry,
+                            world_classes=world_classes)
     seeds = list(seeds)
     results: list[Outcome] = []
 
@@ -264,9 +299,10 @@ def run(seeds: Iterable[int], *, jobs: int = 1,
 
 def summary(outcomes: Sequence[Outcome]) -> dict[str, int]:
     """Counts by kind (every kind present, in :data:`KINDS` order), then the execution counts
-    of :data:`EXECUTION`, then those of :data:`RELABELLING`."""
-    counts = dict.fromkeys((*KINDS, *EXECUTION, *RELABELLING), 0)
+    of :data:`EXECUTION`, then those of :data:`RELABELLING` and :data:`CLASSES`."""
+    counts = dict.fromkeys((*KINDS, *EXECUTION, *RELABELLING, *CLASSES), 0)
     for o in outcomes:
+        counts["classes-differ"] += bool(o.classes_differ)
         counts["preferences"] += o.preferences
         counts["relabelled"] += o.relabelled
         counts["relabel-differs"] += bool(o.relabel_differs)
@@ -278,6 +314,6 @@ def summary(outcomes: Sequence[Outcome]) -> dict[str, int]:
     return counts
 
 
-__all__ = ["DETERMINISM_EVERY", "EXECUTION", "FAILURES", "KINDS", "MAX_STATES", "RELABELLING",
-           "TIMEOUT", "WALK_CAP", "Outcome", "check", "hidden_choices", "relabelled", "run",
-           "summary"]
+__all__ = ["CLASSES", "DETERMINISM_EVERY", "EXECUTION", "FAILURES", "KINDS", "MAX_STATES",
+           "RELABELLING", "TIMEOUT", "WALK_CAP", "Outcome", "check", "hidden_choices",
+           "relabelled", "run", "summary"]

@@ -55,6 +55,7 @@ from ..model.options import ObjectiveKind
 from ..model.problem import Cost
 from . import heuristic as _heuristic
 from .bounds import SPREAD, Bounds
+from .classsemantics import ClassSemantics
 from .graph import (
     DEAD,
     EXPANDED,
@@ -71,8 +72,9 @@ from .heuristic import Bound, Heuristic
 from .interchangeable import detect
 from .limits import Budget, LimitReached, SolveStatus, start_budget
 from .stats import Progress, Stats
-from .symmetry import SymSemantics
+from .symmetry import SymSemantics, describe_classes
 from .values import LiveWorst, Values, compute_values
+from .worldclasses import ClassSymmetry, count
 
 Entry = tuple[Bound, Cost, int]  # the queue's: (f, g, node id)
 PASSIVE_FIELD = EState._fields.index("passive")
@@ -97,7 +99,8 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
            max_depth: int | None = None, progress: Progress | None = None,
            max_memory: int | None = None, budget: Budget | None = None,
            stats: Stats | None = None, symmetry: bool = False,
-           heuristic: bool | None = None, focus: bool = True) -> SearchOutcome:
+           heuristic: bool | None = None, focus: bool = True,
+           world_classes: bool = False) -> SearchOutcome:
     """§7: explore from the root until the optimum is proven (worst case), everything
     reachable is explored (expected cost), or a limit is reached; then the values.
 
@@ -152,12 +155,14 @@ def search(grounded: Grounded, *, timeout: float | None = None, max_states: int 
         states_cap = limits.max_states if max_states is None else max_states
         depth_cap = limits.max_depth if max_depth is None else max_depth
         run = _Search(grounded, budget, stats, states_cap, depth_cap, symmetry=symmetry,
-                      heuristic=_heuristic.enabled(heuristic), focus=focus)
+                      heuristic=_heuristic.enabled(heuristic), focus=focus,
+                      world_classes=world_classes)
         run.run()
         if run.unfocus:  # a depth cut: the search by f decides what the limit cuts (§6)
             stats.restart()
             run = _Search(grounded, budget, stats, states_cap, depth_cap, symmetry=symmetry,
-                          heuristic=_heuristic.enabled(heuristic), focus=False)
+                          heuristic=_heuristic.enabled(heuristic), focus=False,
+                          world_classes=world_classes)
             run.run()
     finally:
         if collecting:
@@ -172,7 +177,8 @@ class _Search:
     with its stopping rule and limits, then the values."""
 
     def __init__(self, grounded: Grounded, budget: Budget, stats: Stats, max_states: int,
-                 max_depth: int, *, symmetry: bool, heuristic: bool, focus: bool) -> None:
+                 max_depth: int, *, symmetry: bool, heuristic: bool, focus: bool,
+                 world_classes: bool = False) -> None:
         self.budget, self.stats = budget, stats
         self.max_states, self.max_depth = max_states, max_depth
         # worst case: stop as soon as the optimum is proven; expected cost: explore everything
@@ -181,6 +187,10 @@ class _Search:
         joint = grounded.problem.steps.concurrent
         sym = detect(grounded, budget.check) if symmetry and not joint else None
         self.sem = semantics_for(grounded) if sym is None else SymSemantics(grounded, sym)
+        if sym is not None and world_classes:  # the human's worlds as classes (issue 17 §2)
+            csym = ClassSymmetry(grounded, describe_classes(sym))
+            if csym.classer.active:
+                self.sem = ClassSemantics(grounded, csym)
         self.sem.bound(budget.check)
         # a human with no task only passes: the robot's bound looks one action ahead
         # (search/heuristic.py, "The robot alone")
@@ -229,7 +239,7 @@ class _Search:
             root_state, gr.root_perm = sem.sym.canon(root_state)
         root = gr.add(root_state, 0, 0)
         stats.generated = stats.distinct = 1
-        stats.max_worlds = len(root_state.worlds)
+        stats.max_worlds = count(root_state.worlds)
         return root
 
     def run(self) -> None:
@@ -486,8 +496,8 @@ def _expand(gr: Graph, n: int, heap: list[Entry] | None, stats: Stats, max_depth
                     return
                 c = gr.add(child, g1, d0, n)
                 stats.distinct += 1
-                if len(child.worlds) > stats.max_worlds:
-                    stats.max_worlds = len(child.worlds)
+                if count(child.worlds) > stats.max_worlds:
+                    stats.max_worlds = count(child.worlds)
                 if heap is not None:
                     heappush(heap, (g1 if hfn is None else g1 + hfn.quick(child), g1, c))
                 edges.append(Edge(gr.descriptor(move, c), c, pid))

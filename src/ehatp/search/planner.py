@@ -165,6 +165,7 @@ class _Settings:
     heuristic: bool | None
     expand: bool = False
     focus: bool = True
+    world_classes: bool = False
 
 
 GC_YOUNG = 100_000
@@ -199,7 +200,8 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
           max_depth: int | None = None, progress: Progress | None = None,
           max_memory: int | None = None, budget: Budget | None = None,
           symmetry: bool | None = None, heuristic: bool | None = None,
-          expand: bool = False, keep_graph: bool = False, focus: bool = True) -> Result:
+          expand: bool = False, keep_graph: bool = False, focus: bool = True,
+          world_classes: bool = False) -> Result:
     """Plan a robot policy for ``problem``, optimal under ``problem.objective``
     (docs/semantics.md §7: worst-case by default, or expected cost).
 
@@ -222,7 +224,10 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
     same policy. ``focus`` (default: on) expands, with that bound, only the tips of the best
     partial policy (docs/semantics.md §7, "Search"; :mod:`.bounds`): far fewer states again,
     the same policy; off, or where the human has no task, every state whose ``g + h`` is at
-    most the optimum is expanded.
+    most the optimum is expanded. ``world_classes`` (with ``symmetry``) keeps the human's
+    worlds as classes of renamings of one another (:mod:`.worldclasses`,
+    docs/semantics.md §3, "Worlds as classes"): the same search node for node, the same
+    policy and ``max_worlds``.
 
     ``keep_graph`` keeps the explored graph in ``Result.graph`` (a :class:`Relabeler`) when
     the objective is ``"preferences"`` (C11), to relabel it for another profile.
@@ -246,7 +251,7 @@ def solve(problem: Problem, *, timeout: float | None = None, max_states: int | N
     if isinstance(grounded, Result):
         return grounded
     settings = _Settings(max_states, max_depth, _symmetry.enabled(symmetry, problem.limits),
-                         heuristic, expand, focus)
+                         heuristic, expand, focus, world_classes)
     try:
         out = _search(grounded, budget, live, settings)
     except LimitReached as e:  # before the first state: looking for symmetry, the bound
@@ -325,7 +330,8 @@ def _search(grounded: Grounded, budget: Budget, live: Stats,
     (§3, "Symmetry": a decision taken by name or index order)."""
     out = search(grounded, max_states=settings.max_states, max_depth=settings.max_depth,
                  budget=budget, stats=live, symmetry=settings.symmetry,
-                 heuristic=settings.heuristic, focus=settings.focus)
+                 heuristic=settings.heuristic, focus=settings.focus,
+                 world_classes=settings.world_classes)
     if out.status == SolveStatus.SYMMETRY_UNSAFE:
         live.restart()
         out = search(grounded, max_states=settings.max_states, max_depth=settings.max_depth,

@@ -159,7 +159,7 @@ def _policy_node(gr: Graph, i: int, n: int, moves: list[PolicyMove]) -> PolicyNo
     ``{a | b}``, §1), its value left 0 (see :func:`_policy`)."""
     sem = gr.sem
     grounded = sem.grounded
-    es: EState = gr.states[n]
+    es: EState = gr.states[n] if gr.sym is None else gr.sym.explicit(gr.states[n])
     t = es.true
     div = 0
     diffs = []
@@ -240,7 +240,7 @@ def liftable(gr: Graph, root: int, values: Values) -> bool:
         chosen = [edges[values.choice[n]]] if gr.is_robot(n) else list(edges)
         for e in chosen:
             if gr.is_robot(n) and e.move.atoms and any(taus[n]) \
-                    and _named_tie(gr.sem, gr.states[n], e.move.atoms):
+                    and _named_tie(gr.sem, sym.explicit(gr.states[n]), e.move.atoms):
                 return False
             mine = taus.setdefault(e.child, set())
             grew = False

@@ -155,7 +155,7 @@ class Symmetry:
         self._renamed: dict[int, dict[int, int]] = {}  # renaming -> state -> its image
         self._renamed_count = 0
         self._renamed_ag: dict[tuple[int, Agenda], Agenda] = {}
-        self._columns: dict[Worlds, _WorldColumns] = {}
+        self._columns: dict[Worlds, Any] = {}  # the worlds' part of signatures, per set
         self._sig_ids: dict[int, tuple[int, ...]] = {}
         self._ag_ids: dict[Agenda, tuple[int, ...]] = {}
         self._sig_index: dict[tuple[int, ...], int] = {}
@@ -287,6 +287,11 @@ class Symmetry:
                     tmap[t] = u
             self._task_maps[pid] = tmap
         return tmap
+
+    def named(self, text: str) -> frozenset[int]:
+        """Return the movable objects a move label or a message names (indices)."""
+        index = self.index
+        return frozenset(index[x] for x in _TOKEN.findall(text) if x in index)
 
     def label(self, pid: int, text: str) -> str:
         """A move label or a message with the objects renamed."""
@@ -468,6 +473,16 @@ class Symmetry:
             values.append(x)
         return i
 
+    def _world_columns(self, worlds: Worlds) -> Any:
+        """Return what the canonical form reads of ``worlds``: each object's column of
+        signatures over them (:class:`_WorldColumns`)."""
+        return _WorldColumns(self, worlds)
+
+    def explicit(self, es: EState) -> EState:
+        """Return ``es`` with its worlds listed (they are: :mod:`.worldclasses` keeps them
+        as classes)."""
+        return es
+
     def forget(self, worlds: Worlds) -> None:
         """Drop what :meth:`canon` kept of ``worlds`` (their signatures), so that the next
         canonical form of a state with these worlds computes them again (a benchmark's
@@ -511,7 +526,7 @@ class Symmetry:
         if cols is None:
             if len(self._columns) >= COLUMNS_CACHE:
                 self._columns.clear()
-            cols = self._columns[es.worlds] = _WorldColumns(self, es.worlds)
+            cols = self._columns[es.worlds] = self._world_columns(es.worlds)
         perm: list[int] | None = None
         for cls in self.classes:
             keys: list[tuple[Any, ...]] = [
