@@ -3,7 +3,7 @@
     .venv/bin/python benchmarks/scaling.py [--max-size N] [--only PATTERN ...] [--big]
         [--no-symmetry] [--timeout S] [--max-memory SIZE] [--repeat N] [--json FILE]
         [--plot FILE.png] [--baseline FILE.json] [--src DIR] [--versus DIR]
-        [--report classes [--top N] [--every]]
+        [--world-classes] [--versus-listed] [--report classes [--top N] [--every]]
 
 Same grid and table as ``ehatp bench scaling`` (``ehatp.experiments.bench``). ``--src DIR`` times
 another checkout's ``src`` directory with this checkout's grid (how docs/benchmarks.md measured
@@ -13,7 +13,10 @@ and plots the two side by side; ``--baseline FILE.json`` adds an earlier run's r
 plot. ``--report classes`` solves each instance once (the search alone) and reports, for its
 ``--top N`` nodes with the most worlds, how many classes the human's worlds form under the
 swaps of objects that leave the node unchanged (``ehatp.experiments.classes``; issue 17 §2);
-``--every`` also sums the worlds and the classes over every node of the search. Timing
+``--every`` also sums the worlds and the classes over every node of the search.
+``--world-classes`` solves with the human's worlds kept as classes (docs/semantics.md §3,
+"Worlds as classes"); ``--versus-listed`` runs every instance both ways, alternately (worlds
+listed, then as classes, run after run), and prints the two side by side. Timing
 lives here and in that command, never in the unit tests.
 """
 
@@ -58,6 +61,12 @@ def main(argv: list[str] | None = None) -> int:
                     help="also time the ehatp package under DIR, alternating run by run")
     ap.add_argument("--report", choices=["classes"],
                     help="classes: count the human's worlds as classes instead of timing")
+    ap.add_argument("--world-classes", action="store_true",
+                    help="solve with the human's worlds kept as classes (docs/semantics.md "
+                         "§3, \"Worlds as classes\")")
+    ap.add_argument("--versus-listed", action="store_true",
+                    help="alternate, point by point and run by run, solving with the worlds "
+                         "listed and with them kept as classes (this checkout)")
     ap.add_argument("--top", type=int, default=5, metavar="N",
                     help="--report classes: the nodes with the most worlds counted (default 5)")
     ap.add_argument("--every", action="store_true",
@@ -82,10 +91,21 @@ def main(argv: list[str] | None = None) -> int:
             print(f"\r\033[Ksolving {p.name} ({i + 1}/{n}, run {run + 1}/{args.repeat})",
                   end="", file=sys.stderr, flush=True)
 
-    if args.versus is None:
+    if args.versus_listed:  # one point at a time, listed and classes alternating run by run
+        series = {"worlds listed": [], "world classes": []}
+        for i, p in enumerate(points):
+            for r in range(args.repeat):
+                notify(p, i, len(points), r)
+                for label, kept in (("worlds listed", False), ("world classes", True)):
+                    series[label] += bench.run_scaling([p], timeout=args.timeout,
+                                                       max_memory=memory, src=args.src,
+                                                       symmetry=symmetry, world_classes=kept)
+        series = {k: _medians(v) for k, v in series.items()}
+    elif args.versus is None:
         series = {"ehatp": bench.run_scaling(points, timeout=args.timeout, max_memory=memory,
                                              repeat=args.repeat, src=args.src, notify=notify,
-                                             symmetry=symmetry)}
+                                             symmetry=symmetry,
+                                             world_classes=args.world_classes)}
     else:  # one point at a time, the two versions alternating run by run
         series = {"versus": [], "this checkout": []}
         for i, p in enumerate(points):
@@ -94,15 +114,18 @@ def main(argv: list[str] | None = None) -> int:
                 for label, src in (("versus", args.versus), ("this checkout", args.src)):
                     series[label] += bench.run_scaling([p], timeout=args.timeout,
                                                        max_memory=memory, src=src,
-                                                       symmetry=symmetry)
+                                                       symmetry=symmetry,
+                                                       world_classes=args.world_classes)
         series = {k: _medians(v) for k, v in series.items()}
     if sys.stderr.isatty():
         print("\r\033[K", end="", file=sys.stderr, flush=True)
-    data = series["ehatp"] if args.versus is None else series
+    data: Any = series.get("ehatp", series)
     if args.json is not None:
         args.json.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
     for label, rows in series.items():
-        if args.versus is not None:
+        if args.versus_listed:
+            print(f"== {label}")
+        elif args.versus is not None:
             print(f"== {label}: {args.versus if label == 'versus' else args.src}")
         sys.stdout.write(bench.format_scaling(rows))
     if args.plot is not None:

@@ -93,7 +93,8 @@ def bench_table1(
 
 
 def _run_points(points: list[Any], timeout: float, memory: int, repeat: int,
-                symmetry: bool | None, classes: bool) -> list[dict[str, Any]]:
+                symmetry: bool | None, classes: bool,
+                world_classes: bool = False) -> list[dict[str, Any]]:
     """Return the scaling rows of ``points``, each solved in a process of its own, and say on
     stderr one line per finished point (:func:`~ehatp.experiments.bench.progress_line`),
     whether stderr is a terminal or a pipe or a file, with a status line on a terminal saying
@@ -119,7 +120,8 @@ def _run_points(points: list[Any], timeout: float, memory: int, repeat: int,
     try:
         return bench_mod.run_scaling(points, timeout=timeout, max_memory=memory,
                                      repeat=repeat, notify=notify, symmetry=symmetry,
-                                     done=done, classes=classes)
+                                     done=done, classes=classes,
+                                     world_classes=world_classes)
     finally:
         if status is not None:
             status.stop()
@@ -160,6 +162,9 @@ def bench_scaling(
                           "another under the swaps that fix the node) at the node with the "
                           "most worlds: a second search over canonical states, after the "
                           "timed figures and not in them, of at most --timeout.")] = False,
+    world_classes: Annotated[bool, typer.Option(
+        "--world-classes", help="Solve with the human's worlds kept as classes "
+                                "(docs/semantics.md §3, \"Worlds as classes\").")] = False,
 ) -> None:
     """Solve a grid of generated problems, each in a fresh process, and show how time and
     memory grow: cubes 3-10 split over both tables, 2-3 boxes, transparent or opaque, trips of
@@ -170,7 +175,8 @@ def bench_scaling(
     Per instance: time (solve and the policy as JSON), the whole process's CPU time, states
     generated and distinct (canonical, with symmetry), states/s, |W|, peak resident memory,
     the policy's size (nodes, bytes) and the share of time in each phase (grounding, search,
-    values, extraction, writing); with --classes, the |W| classes. Exit 1 if an instance
+    values, extraction, writing); with --classes, the |W| classes; with --world-classes the
+    solves keep the human's worlds as classes. Exit 1 if an instance
     crashed (a stop at --timeout or --max-memory is a result, not a failure).
     """
     from ..experiments import bench as bench_mod
@@ -186,7 +192,8 @@ def bench_scaling(
         what = f"--only {' '.join(only)}" if only else f"--max-size {max_size}"
         die(f"{what}: no grid instance selected; names look like cubes-c6-b3-opaque-k8, "
             "cooking-k4")
-    rows = _run_points(points, timeout, memory, repeat, False if no_symmetry else None, classes)
+    rows = _run_points(points, timeout, memory, repeat, False if no_symmetry else None, classes,
+                       world_classes)
     if json_out is not None:
         _write_rows(rows, json_out)
     if str(json_out) != "-":

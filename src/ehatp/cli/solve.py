@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from ..errors import printable
+from ..errors import InputError, printable
 from ..model.options import ObjectiveKind
 from ..model.problem import Problem
 from ..search.limits import SolveStatus
@@ -135,6 +135,11 @@ def solve_cmd(
         "--no-focus", help="Expand every state whose g + h is at most the optimum, as 0.2 "
                            "did, not only the best partial policy's tips: the same policy, "
                            "more states (docs/semantics.md §7, \"Search\").")] = False,
+    world_classes: Annotated[bool, typer.Option(
+        "--world-classes", help="Keep the human's worlds as classes of renamings of one "
+                                "another (with the symmetry reduction): the same policy, less "
+                                "memory, faster where worlds multiply (docs/semantics.md §3, "
+                                "\"Worlds as classes\").")] = False,
 ) -> None:
     """Plan a robot policy, optimal under the problem's objective, and write it as JSON.
 
@@ -150,6 +155,11 @@ def solve_cmd(
 
     memory = memory_option(max_memory)
     prob = with_objective(load_problem(problem), objective)
+    if world_classes and (no_symmetry or not prob.limits.symmetry):
+        with user_errors(problem):
+            raise InputError(str(problem), "", "--world-classes keeps worlds as classes of "
+                             "renamings, which needs the symmetry reduction, and it is off",
+                             "leave out --no-symmetry (and set [limits] symmetry = true)")
     limits = prob.limits
     budget = Budget(limits.timeout if timeout is None else timeout,
                     limits.max_memory if memory is None else memory, start=t0)
@@ -165,7 +175,7 @@ def solve_cmd(
                 result = solve(prob, max_states=max_states, max_depth=max_depth,
                                progress=live, budget=budget,
                                symmetry=False if no_symmetry else None, expand=expand,
-                               focus=not no_focus)
+                               focus=not no_focus, world_classes=world_classes)
             result, written = _write(result, target, budget)
     finally:
         if live is not None:

@@ -331,7 +331,8 @@ import inspect, json, resource, sys, time
 t_start = time.perf_counter()
 import ehatp
 path, timeout, max_memory, symmetry = sys.argv[1], float(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
-want_classes = sys.argv[5:] == ["classes"]
+flags = set(sys.argv[5:])
+want_classes = "classes" in flags
 problem = ehatp.load(path)
 params = inspect.signature(ehatp.solve).parameters
 kw = {"timeout": timeout}
@@ -339,6 +340,8 @@ if max_memory and "max_memory" in params:
     kw["max_memory"] = max_memory
 if symmetry != "default" and "symmetry" in params:
     kw["symmetry"] = symmetry == "on"
+if "world-classes" in flags and "world_classes" in params:
+    kw["world_classes"] = True
 marks = []  # (phase, time it started)
 try:
     from ehatp.search.limits import Budget
@@ -452,7 +455,8 @@ def _phase_order(g: str) -> tuple[int, str]:
 
 def run_point(point: GridPoint, *, timeout: float, max_memory: int = 0,
               src: str | None = None, workdir: str | None = None,
-              symmetry: bool | None = None, classes: bool = False) -> dict[str, Any]:
+              symmetry: bool | None = None, classes: bool = False,
+              world_classes: bool = False) -> dict[str, Any]:
     """Solve ``point`` in a fresh Python process (``src``: the ``src`` directory of another
     checkout to time instead of this one; ``symmetry``: force the reduction of
     docs/semantics.md §3 on or off, default the problem's). The child stops itself at
@@ -466,7 +470,9 @@ def run_point(point: GridPoint, *, timeout: float, max_memory: int = 0,
     as classes at the node with the most (issue 17 §2; :func:`~.classes.count`, its
     ``worlds``, ``classes`` and ``cells``), counted after every timed figure by a second
     search of at most ``timeout``, over canonical states; None when the problem has no
-    interchangeable objects or that search did not finish."""
+    interchangeable objects or that search did not finish. ``world_classes`` solves with
+    the human's worlds kept as classes (docs/semantics.md §3, "Worlds as classes"; ignored by
+    a checkout whose ``solve`` has no such option)."""
     import json
     import os
     import subprocess
@@ -476,7 +482,7 @@ def run_point(point: GridPoint, *, timeout: float, max_memory: int = 0,
     row: dict[str, Any] = {"instance": point.name, "size": point.size, "K": point.K,
                            "cubes": point.cubes, "boxes": point.boxes,
                            "transparent": point.transparent, "reach": point.reach,
-                           "symmetry": symmetry}
+                           "symmetry": symmetry, "world_classes": world_classes}
     env = dict(os.environ)
     if src is not None:
         env["PYTHONPATH"] = src + os.pathsep + env.get("PYTHONPATH", "")
@@ -486,7 +492,8 @@ def run_point(point: GridPoint, *, timeout: float, max_memory: int = 0,
             f.write(point.toml())
         sym = "default" if symmetry is None else ("on" if symmetry else "off")
         cmd = [sys.executable, "-c", _CHILD, path, str(timeout), str(max_memory), sym,
-               *(["classes"] if classes else [])]
+               *(["classes"] if classes else []),
+               *(["world-classes"] if world_classes else [])]
         wait = (2 if classes else 1) * timeout * 1.05 + 10
         try:
             proc = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=wait)
@@ -534,12 +541,13 @@ def run_scaling(points: Sequence[GridPoint], *, timeout: float, max_memory: int 
                 repeat: int = 1, src: str | None = None,
                 notify: ScalingNotify | None = None,
                 symmetry: bool | None = None,
-                done: ScalingDone | None = None, classes: bool = False) -> list[dict[str, Any]]:
+                done: ScalingDone | None = None, classes: bool = False,
+                world_classes: bool = False) -> list[dict[str, Any]]:
     """Return one row per point, each point run ``repeat`` times in its own process, with the
     medians of :data:`MEDIAN_KEYS` (the counts are the same every run; the phases are the last
     run's). ``notify`` is called before each run, ``done`` with each point's row once it is
-    finished (:func:`progress_line` says it in one line); ``classes``: as
-    :func:`run_point`."""
+    finished (:func:`progress_line` says it in one line); ``classes`` and ``world_classes``:
+    as :func:`run_point`."""
     import statistics
 
     rows = []
@@ -549,7 +557,8 @@ def run_scaling(points: Sequence[GridPoint], *, timeout: float, max_memory: int 
             if notify is not None:
                 notify(p, i, len(points), r)
             runs.append(run_point(p, timeout=timeout, max_memory=max_memory, src=src,
-                                  symmetry=symmetry, classes=classes))
+                                  symmetry=symmetry, classes=classes,
+                                  world_classes=world_classes))
             if runs[-1]["status"] not in ("solved", "unsolvable"):
                 break  # a limit or a crash: repeating it tells nothing more
         row = dict(runs[-1])

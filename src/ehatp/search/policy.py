@@ -333,7 +333,8 @@ def _realise(gr: Graph, root: int, values: Values,
     assert sym is not None
     rg = Graph(sem)
     tau0 = sym.inverse(gr.root_perm)
-    real_root = rg.add(sym.apply(tau0, gr.states[root]), 0, 0)
+    # the real states with their worlds listed (worlds kept as classes: search/worldclasses.py)
+    real_root = rg.add(sym.explicit(sym.apply(tau0, gr.states[root])), 0, 0)
     choice: dict[int, int] = {}
     stack = [(root, tau0, real_root)]
     while stack:
@@ -345,7 +346,8 @@ def _realise(gr: Graph, root: int, values: Values,
         rg.status[r] = EXPANDED
         edges = gr.edges[n]
         chosen = [edges[values.choice[n]]] if gr.is_robot(n) else list(edges)
-        real = sorted(sem.moves(rg.states[r]), key=move_key)
+        real = sorted((m if m.child is None else replace(m, child=sym.explicit(m.child))
+                       for m in sem.moves(rg.states[r])), key=move_key)
         if not gr.is_robot(n) and len(real) != len(chosen):
             return f"{len(real)} real moves for {len(chosen)} canonical ones"
         used: set[int] = set()
@@ -354,7 +356,7 @@ def _realise(gr: Graph, root: int, values: Values,
             if e.child < 0:
                 return "a failing move in the policy"
             sigma = sym.compose(tau, sym.inverse(e.perm))
-            z = sym.apply(sigma, gr.states[e.child])
+            z = sym.explicit(sym.apply(sigma, gr.states[e.child]))
             j = _match(sym, tau, e.move, z, real, used)
             if j < 0:  # a tie decided by name (§5): a real move to a renaming of the child
                 j, z, sigma = _match_orbit(sym, e.move, gr.states[e.child], real, used)
