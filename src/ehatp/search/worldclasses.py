@@ -47,6 +47,8 @@ from collections.abc import Iterable, Iterator, Sequence
 from itertools import combinations, product
 from typing import Any
 
+from mypy_extensions import mypyc_attr
+
 from ..epistemic.state import EState, World, Worlds
 from ..model.agenda import Agenda
 from ..model.grounded import Grounded
@@ -63,6 +65,7 @@ PROFILE_CACHE = 1 << 19
 """How many states' (agendas') profiles :class:`Classer` remembers before it starts afresh."""
 
 
+@mypyc_attr(native_class=False)  # a tuple subclass: a Python class when compiled
 class WorldClasses(tuple[World, ...]):
     """A set of worlds kept as classes: the tuple holds each class's representative, sorted;
     ``cells`` the cells of the group, ``mults`` each class's size, ``size`` ``|W|``.
@@ -220,6 +223,7 @@ class Classer:
         self._n = n
         self._sp: dict[int, tuple[int, ...]] = {}
         self._ap: dict[Agenda, tuple[int, ...]] = {}
+        self._plain: dict[Agenda, bool] = {}  # agenda -> it names no unary object
         self._sprofs: dict[tuple[int, ...], int] = {(): 0}
         self._sprof_values: list[tuple[int, ...]] = [()]
         self._aprofs: dict[tuple[tuple[int, int], ...], int] = {(): 0}
@@ -279,7 +283,9 @@ class Classer:
                 ids[o] = j
             if len(self._ap) >= PROFILE_CACHE:
                 self._ap.clear()
+                self._plain.clear()
             r = self._ap[ag] = tuple(ids)
+            self._plain[ag] = not acc
         return r
 
     def _atoms(self, o: int, sp: int) -> int:
@@ -318,46 +324,66 @@ class Classer:
         return self.sprof(w[0]), self.aprof(w[1])
 
     # -- classes -------------------------------------------------------------------------------
-    def classify(self, w: World, cells: Cells) -> tuple[World, int]:
-        """Return the representative of ``w``'s class under ``cells`` (each cell's profiles
-        sorted, over its objects in index order) and the class's size,
-        ``∏ |C|! / ∏ m_p!``."""
-        sp, ap = self.sprof(w[0]), self.aprof(w[1])
-        changes: list[tuple[int, Profile]] = []
+    def canonical(self, w: World, cells: Cells) -> World:
+        """Return the representative of ``w``'s class under ``cells``: each cell's profiles
+        sorted, over its objects in index order."""
+        s, a = w
+        sp = self._sp.get(s) or self.sprof(s)
+        if not a or self._plain.get(a, False):  # its robot agenda names no unary object
+            changes: list[tuple[int, Profile]] | None = None
+            for cell in cells:
+                profs = [sp[o] for o in cell]
+                srt = sorted(profs)
+                if srt != profs:
+                    if changes is None:
+                        changes = []
+                    changes.extend((o, (q, 0)) for o, p, q in zip(cell, profs, srt, strict=True)
+                                   if p != q)
+            return self.assign(w, changes) if changes else w
+        ap = self.aprof(a)
+        changes = None
+        for cell in cells:
+            pairs = [(sp[o], ap[o]) for o in cell]
+            ordered = sorted(pairs)
+            if ordered != pairs:
+                if changes is None:
+                    changes = []
+                changes.extend((o, q) for o, p, q in zip(cell, pairs, ordered, strict=True)
+                               if p != q)
+        return self.assign(w, changes) if changes else w
+
+    def size(self, rep: World, cells: Cells) -> int:
+        """Return the size of the class of representative ``rep`` under ``cells``:
+        ``∏ |C|! / ∏ m_p!`` (equal profiles are next to one another in a representative)."""
+        sp, ap = self.sprof(rep[0]), self.aprof(rep[1])
         size = 1
         for cell in cells:
-            profs = [(sp[o], ap[o]) for o in cell]
-            srt = sorted(profs)
-            if srt != profs:
-                changes.extend((o, q) for o, p, q in zip(cell, profs, srt, strict=True)
-                               if p != q)
             n = _FACT[len(cell)]
-            prev, run = srt[0], 0
-            for q in srt:
+            prev, run = (sp[cell[0]], ap[cell[0]]), 0
+            for o in cell:
+                q = (sp[o], ap[o])
                 if q == prev:
                     run += 1
                 else:
                     n //= _FACT[run]
                     prev, run = q, 1
             size *= n // _FACT[run]
-        return (self.assign(w, changes) if changes else w), size
+        return size
 
-    def canonical(self, w: World, cells: Cells) -> World:
-        """Return the representative of ``w``'s class under ``cells``."""
-        return self.classify(w, cells)[0]
-
-    def size(self, w: World, cells: Cells) -> int:
-        """Return the size of ``w``'s class under ``cells``."""
-        return self.classify(w, cells)[1]
+    def classify(self, w: World, cells: Cells) -> tuple[World, int]:
+        """Return the representative of ``w``'s class under ``cells`` and the class's size."""
+        r = self.canonical(w, cells)
+        return r, self.size(r, cells)
 
     def classes_of(self, worlds: Iterable[World], cells: Cells) -> WorldClasses:
         """Return the classes under ``cells`` of the worlds ``worlds`` (each counted once per
         class: a union of classes is what :meth:`make` is given)."""
         reps: dict[World, int] = {}
-        classify = self.classify
+        canonical, size = self.canonical, self.size
         for w in worlds:
-            r, n = classify(w, cells)
-            reps[r] = n
+            r = canonical(w, cells)
+            if r not in reps:
+                reps[r] = size(r, cells)
         return self.make(reps, cells)
 
     def make(self, reps: dict[World, int], cells: Cells) -> WorldClasses:
