@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 
 from ehatp import load
 from ehatp.check.validator import validate
+from ehatp.epistemic.classworlds import WorldClasses, count
 from ehatp.epistemic.state import EState, World
 from ehatp.experiments.bench import GridPoint
 from ehatp.formats.problem_toml import loads
@@ -25,7 +26,7 @@ from ehatp.search import classsemantics
 from ehatp.search.interchangeable import detect
 from ehatp.search.planner import solve
 from ehatp.search.symmetry import Symmetry, describe_classes
-from ehatp.search.worldclasses import ClassSymmetry, WorldClasses, count
+from ehatp.search.worldclasses import ClassSymmetry
 
 from .conftest import EXAMPLES, Example
 

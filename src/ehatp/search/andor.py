@@ -46,6 +46,7 @@ import heapq
 import time
 from dataclasses import dataclass
 
+from ..epistemic.classworlds import count
 from ..epistemic.concurrent import semantics_for
 from ..epistemic.semantics import DEAD_PASSIVE_RUN, PASSIVE_CARRIED, Move
 from ..epistemic.state import ROBOT, EState
@@ -74,7 +75,7 @@ from .limits import Budget, LimitReached, SolveStatus, start_budget
 from .stats import Progress, Stats
 from .symmetry import SymSemantics, describe_classes
 from .values import LiveWorst, Values, compute_values
-from .worldclasses import ClassSymmetry, count
+from .worldclasses import ClassSymmetry
 
 Entry = tuple[Bound, Cost, int]  # the queue's: (f, g, node id)
 PASSIVE_FIELD = EState._fields.index("passive")

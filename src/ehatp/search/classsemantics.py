@@ -26,6 +26,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from ..epistemic.classworlds import WorldClasses
 from ..epistemic.semantics import ACTION, WAIT, Move
 from ..epistemic.state import HUMAN, ROBOT, EState, Worlds, states_of
 from ..model.agenda import Agenda
@@ -33,7 +34,7 @@ from ..model.formula import Formula, ground_atoms
 from ..model.grounded import FINISH, GOp, Grounded
 from ..model.options import Passes, Speech
 from .symmetry import SymSemantics
-from .worldclasses import ClassSymmetry, WorldClasses
+from .worldclasses import ClassSymmetry
 
 
 def _atoms(f: Formula) -> int:
@@ -52,8 +53,6 @@ class ClassSemantics(SymSemantics):
     """:class:`~.symmetry.SymSemantics` over nodes whose worlds are classes: the robot's moves
     while apart on the classes (the module's docstring), every other node on its worlds
     listed."""
-
-    sym: ClassSymmetry
 
     def __init__(self, grounded: Grounded, sym: ClassSymmetry) -> None:
         super().__init__(grounded, sym)

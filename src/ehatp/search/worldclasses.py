@@ -33,9 +33,10 @@ cells have sizes that add up to ``|W|`` (``W`` is within their union, so it is t
 exactly when the counts agree). Since the relation is an equivalence, merging greedily finds
 the cells.
 
-**Multiplicities and |W|.** ``len`` of a :class:`WorldClasses` is its number of classes (it is
-a tuple of representatives, as every container of worlds the rules may read is a tuple);
-:func:`count` is ``|W|``, the sum of the multiplicities, which is what the search reports.
+**Multiplicities and |W|.** ``len`` of a ``WorldClasses`` (``epistemic/classworlds.py``) is
+its number of classes (it is a tuple of representatives, as every container of worlds the
+rules may read is a tuple); its ``count`` is ``|W|``, the sum of the multiplicities, which is
+what the search reports.
 :meth:`Classer.expand` lists the worlds, sorted, as the rules without a class form and the
 policy's nodes read them.
 """
@@ -47,14 +48,12 @@ from collections.abc import Iterable, Iterator, Sequence
 from itertools import combinations, product
 from typing import Any
 
-from mypy_extensions import mypyc_attr
-
+from ..epistemic.classworlds import Cells, WorldClasses
 from ..epistemic.state import EState, World, Worlds
 from ..model.agenda import Agenda
 from ..model.grounded import Grounded
 from .symmetry import Symmetry, _WorldColumns
 
-Cells = tuple[tuple[int, ...], ...]  # each cell's objects (indices into Symmetry.objects), sorted
 Profile = tuple[int, int]  # (state profile id, agenda profile id) of one object in one world
 
 _FACT = [1]
@@ -63,72 +62,6 @@ for _i in range(1, 200):
 
 PROFILE_CACHE = 1 << 19
 """How many states' (agendas') profiles :class:`Classer` remembers before it starts afresh."""
-
-
-@mypyc_attr(native_class=False)  # a tuple subclass: a Python class when compiled
-class WorldClasses(tuple[World, ...]):
-    """A set of worlds kept as classes: the tuple holds each class's representative, sorted;
-    ``cells`` the cells of the group, ``mults`` each class's size, ``size`` ``|W|``.
-
-    Equal sets of worlds have equal forms when both have the node's cells (every form the
-    search keeps: :meth:`Classer.fit`), so equality and the hash read the form; an order
-    between two sets reads the worlds themselves, as the order of moves by their child does
-    (it compares the worlds listed)."""
-
-    cells: Cells
-    mults: tuple[int, ...]
-    size: int
-    classer: Classer
-
-    def __new__(cls, reps: Iterable[World], cells: Cells, mults: Iterable[int],
-                classer: Classer) -> WorldClasses:
-        self = super().__new__(cls, reps)
-        self.cells = cells
-        self.mults = tuple(mults)
-        self.size = sum(self.mults)
-        self.classer = classer
-        return self
-
-    def __eq__(self, other: object) -> bool:
-        if isinstance(other, WorldClasses):
-            return self.cells == other.cells and tuple.__eq__(self, other)
-        return False
-
-    def __ne__(self, other: object) -> bool:
-        return not self == other
-
-    def __hash__(self) -> int:
-        return hash((self.cells, tuple.__hash__(self)))
-
-    def _worlds(self, other: object) -> tuple[Worlds, Worlds]:
-        mine = self.classer.expand(self)
-        theirs = (other.classer.expand(other) if isinstance(other, WorldClasses)
-                  else tuple(other))  # type: ignore[arg-type]
-        return mine, theirs
-
-    def __lt__(self, other: object) -> bool:
-        a, b = self._worlds(other)
-        return a < b
-
-    def __le__(self, other: object) -> bool:
-        a, b = self._worlds(other)
-        return a <= b
-
-    def __gt__(self, other: object) -> bool:
-        a, b = self._worlds(other)
-        return a > b
-
-    def __ge__(self, other: object) -> bool:
-        a, b = self._worlds(other)
-        return a >= b
-
-    def __reduce__(self) -> Any:
-        return (tuple, (self.classer.expand(self),))
-
-
-def count(worlds: Worlds) -> int:
-    """Return ``|W|``: the number of worlds ``worlds`` holds or stands for."""
-    return worlds.size if isinstance(worlds, WorldClasses) else len(worlds)
 
 
 def _distinct_permutations(items: Sequence[Profile]) -> Iterator[tuple[Profile, ...]]:
@@ -634,4 +567,4 @@ class ClassSymmetry(Symmetry):
         return es
 
 
-__all__ = ["Classer", "ClassSymmetry", "WorldClasses", "count"]
+__all__ = ["Classer", "ClassSymmetry"]
