@@ -60,8 +60,13 @@ _FACT = [1]
 for _i in range(1, 200):
     _FACT.append(_FACT[-1] * _i)
 
-PROFILE_CACHE = 1 << 19
+PROFILE_CACHE = 1 << 18
 """How many states' (agendas') profiles :class:`Classer` remembers before it starts afresh."""
+
+EXPANDED_CACHE = 8
+"""How many sets of classes :meth:`Classer.expand` keeps listed (a node's worlds are listed
+for its moves, its goal test and its policy node; at 30 cubes / 4 boxes / K=8 one holds
+35,916 worlds)."""
 
 
 def _distinct_permutations(items: Sequence[Profile]) -> Iterator[tuple[Profile, ...]]:
@@ -347,7 +352,7 @@ class Classer:
                     out.append(self.assign(rep, changes) if changes else rep)
             out.sort()
             r = tuple(out)
-            if len(self._expanded) >= 64:
+            if len(self._expanded) >= EXPANDED_CACHE:
                 self._expanded.clear()
             self._expanded[wc] = r
         return r
