@@ -145,3 +145,52 @@ def test_importing_the_validator_does_not_load_the_planner() -> None:
                          check=True).stdout.strip()
     assert out == "[]"
 
+
+
+def _ask_labels(policy: ehatp.Policy) -> list[list[str]]:
+    return [[m.action for m in n.moves if m.action.startswith("ask(")] for n in policy.nodes]
+
+
+def test_one_set_of_uncertain_conditions_met_in_two_orders_is_one_question() -> None:
+    """Derived by hand from §4 (random seed 121773 of the agreement benchmark, where planner
+    and validator read it differently). The human has two hypotheses, ``take(y), take(x),
+    take(y)`` and ``take(x), take(y), take(y)``; co-present after ``h0`` and the robot's
+    ``r0``, both find ``mark(x)`` and ``mark(y)`` uncertain, in opposite orders. A question is
+    the set of its conjuncts, printed in the order of their text: one branch
+    ``ask(not mark(x) and not mark(y))`` (kept by both hypotheses), never a second with the
+    same two conjuncts the other way round; the validator agrees and the policy runs."""
+    from ehatp.check.validator import validate
+    from ehatp.experiments.randomgen import build, draw
+    from ehatp.run.walk import walk_policy
+
+    p = build(draw(121773))
+    r = ehatp.solve(p)
+    assert r.policy is not None
+    for labels in _ask_labels(r.policy):
+        sets = [frozenset(x.strip() for x in a[4:-1].split(" and ")) for a in labels]
+        assert len(sets) == len(set(sets)), labels
+        for a in labels:
+            parts = a[4:-1].split(" and ")
+            assert parts == sorted(parts), a
+    assert any("ask(not mark(x) and not mark(y))" in labels
+               for labels in _ask_labels(r.policy))
+    assert validate(p, r.policy).ok
+    assert walk_policy(p, r.policy).ok
+
+
+def test_a_conjunction_that_simplifies_to_one_conjunct_reads_as_that_conjunct() -> None:
+    """Derived by hand (random seed 121709, in joint steps). The human's method ``c0`` needs
+    ``a2``; the robot's ``r0`` needs ``a2 & a3``, where ``a3`` is always true and folds away,
+    so both ground to the one atom ``a2``. Which model was grounded first used to decide how
+    that atom read, and the validator (grounding in another order) asked ``ask(a2 and a3)``
+    where the planner asked ``ask(a2)``. A conjunction that simplifies to one of its conjuncts
+    reads as that conjunct: the human's question is ``ask(a2)`` both ways."""
+    from ehatp.check.validator import validate
+    from ehatp.experiments.randomgen import build, draw
+
+    p = build(draw(121709))
+    r = ehatp.solve(p)
+    assert r.policy is not None
+    assert "ask(a2)" in _ask_labels(r.policy)[0]
+    report = validate(p, r.policy)
+    assert report.ok, report.message

@@ -552,7 +552,8 @@ class Rules:
         return sorted(humans, key=self.shown)
 
     def conjuncts(self, conds: Sequence[Formula], states: frozenset[int]) -> list[Formula]:
-        """The conjuncts of the uncertain conditions whose value differs between worlds."""
+        """The conjuncts of the uncertain conditions whose value differs between worlds, in
+        the order of their text (§4: a question is the set of them)."""
         flat: list[Formula] = []
         for c in conds:
             flat.extend(c.args if isinstance(c, And) else (c,))
@@ -561,7 +562,7 @@ class Rules:
             fn = self.grounded.compile(f)
             if len({bool(fn(s)) for s in states}) > 1:
                 out.append(f)
-        return out
+        return sorted(out, key=self.text)
 
     def text(self, f: Formula) -> str:
         r = self.grounded.reading(f)

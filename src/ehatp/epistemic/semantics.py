@@ -611,15 +611,15 @@ class Semantics:
 
     # -- communication ------------------------------------------------------------------------
     def uncertain_part(self, phi: Formula, states: tuple[int, ...]) -> Formula:
-        """§4: the conjuncts of ``phi`` whose value differs between the worlds, each once: what
-        the human is actually unsure of."""
+        """§4: the conjuncts of ``phi`` whose value differs between the worlds, each once, in
+        the order of their text: what the human is unsure of (a question is their set)."""
         parts = phi.args if isinstance(phi, And) else (phi,)
         keep: list[Formula] = []
         for p in parts:
             fn = self.grounded.compile(p)
             if p not in keep and len({fn(s) for s in states}) > 1:
                 keep.append(p)
-        return conj(*keep) if keep else phi
+        return conj(*sorted(keep, key=self.show)) if keep else phi
 
     def show(self, f: Formula) -> str:
         """§4: a formula as the domain wrote it (derived predicates by name), for ``ask`` labels."""

@@ -408,14 +408,15 @@ class _Grounder:
                 written[g] = (f, binding)
             return g
         # each conjunct grounded once: the conjunction is their simplified And (as ground()
-        # makes it), and each keeps its own reading too
+        # makes it), and each keeps its own reading too, first: a conjunction that simplifies
+        # to one of its conjuncts reads as that conjunct, whichever formula was grounded first
         parts = [(part, self.ground_f(part, binding)) for part in f.args]
         g = simplify_and([gp for _, gp in parts])
-        if g not in written:
-            written[g] = (f, binding)
         for part, gp in parts:
             if gp not in written:
                 written[gp] = (part, binding)
+        if g not in written:
+            written[g] = (f, binding)
         return g
 
     # -- tasks --
