@@ -28,7 +28,7 @@ from dataclasses import replace
 
 from ..epistemic.classworlds import WorldClasses
 from ..epistemic.semantics import ACTION, WAIT, Move
-from ..epistemic.state import HUMAN, ROBOT, EState, Worlds, states_of
+from ..epistemic.state import HUMAN, ROBOT, EState, Worlds
 from ..model.agenda import Agenda
 from ..model.formula import Formula, ground_atoms
 from ..model.grounded import FINISH, GOp, Grounded
@@ -71,7 +71,9 @@ class ClassSemantics(SymSemantics):
             return self._robot_apart(es)
         if (es.turn == HUMAN and not es.answering and not self.copresent(es.true)
                 and self._options_blind(es)):
-            return super().moves(es)  # human_options and human_exec below read the classes
+            # Semantics.human_options reads the representatives' states as W's (exact here:
+            # every condition it reads has one value over a class), human_exec the classes
+            return super().moves(es)
         return [self._keep_cells(es.worlds, m)
                 for m in super().moves(self.sym.explicit(es))]
 
@@ -164,27 +166,6 @@ class ClassSemantics(SymSemantics):
         if not busy:
             self._reads_tasks[t] = (mask, vanish)
         return mask, vanish
-
-    def human_options(self, es: EState, h: Agenda) -> tuple[
-            list[tuple[int, Agenda]], dict[str, Formula], bool, bool]:
-        """§4 for one human agenda on classes (while apart, :meth:`_options_blind`): the
-        options certain over the representatives' states are the ones certain over every
-        world's."""
-        if not isinstance(es.worlds, WorldClasses):
-            return super().human_options(es, h)
-        assert not self.copresent(es.true)
-        states = states_of(es.worlds)
-        full = (1 << len(states)) - 1
-        acts: list[tuple[int, Agenda]] = []
-        finished = False
-        for op, rest, worlds, _ in self.H.refine_in_all(h, states):
-            if worlds == full:
-                if op != FINISH:
-                    acts.append((op, rest))
-                else:
-                    finished = True
-        may_pass = not acts  # apart, the pass rule reads only the actions (§4)
-        return acts, {}, may_pass, not acts and not finished
 
     def human_exec(self, es: EState, op: GOp, rests: tuple[Agenda, ...]) -> Move:
         """§4: the human does ``op`` while apart, on classes: every world advances (and

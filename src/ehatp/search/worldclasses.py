@@ -111,6 +111,25 @@ def _splits(pool: tuple[Profile, ...], sizes: Sequence[int]) -> Iterator[list[tu
             yield [part, *rest]
 
 
+def _owned(roles: dict[int, tuple[tuple[int, int], ...]], keys: dict[int, tuple[int, ...]],
+           unary: set[int], codes: dict[tuple[int, ...], int]
+           ) -> tuple[dict[int, int], dict[int, int], dict[tuple[int, int], int]]:
+    """Return, for the atoms (tasks) of ``roles`` that name a unary object: that object, the
+    code of the atom with the object as "self" (``codes``, shared, grows), and the atom of
+    each (code, object)."""
+    owner: dict[int, int] = {}
+    code: dict[int, int] = {}
+    at: dict[tuple[int, int], int] = {}
+    for i, named in roles.items():
+        owners = [o for o, _ in named if o in unary]
+        if owners:
+            o = owners[0]
+            c = codes.setdefault(tuple(-1 if x == o else x for x in keys[i]), len(codes))
+            owner[i], code[i] = o, c
+            at[(c, o)] = i
+    return owner, code, at
+
+
 class Classer:
     """The profiles of a ground problem's unary objects (the module's docstring), and the
     operations on :class:`WorldClasses`: representatives, sizes, expansion, the cells of a
@@ -131,33 +150,17 @@ class Classer:
             chosen.append(c)
         self.unary = sorted(o for c in chosen for o in sym.classes[c])
         unary = set(self.unary)
-        self._unary_class = {c for c in chosen}
         codes: dict[tuple[int, ...], int] = {}
-        self._atom_owner: dict[int, int] = {}
-        self._atom_code: dict[int, int] = {}
-        self._atom_at: dict[tuple[int, int], int] = {}  # (code, object) -> atom
+        # per atom (task) naming a unary object: that object, the atom's code with it as
+        # "self", and back from (code, object) to the atom (task)
+        self._atom_owner, self._atom_code, self._atom_at = _owned(
+            sym._atom_roles, sym._atom_keys, unary, codes)
         self.atom_mask = 0
-        for i, roles in sym._atom_roles.items():
-            owners = [o for o, _ in roles if o in unary]
-            if owners:
-                o = owners[0]
-                c = codes.setdefault(tuple(-1 if x == o else x for x in sym._atom_keys[i]),
-                                     len(codes))
-                self._atom_owner[i], self._atom_code[i] = o, c
-                self._atom_at[(c, o)] = i
-                self.atom_mask |= 1 << i
+        for i in self._atom_owner:
+            self.atom_mask |= 1 << i
         self._object_mask = [sym._object_atoms[o] & self.atom_mask for o in range(n)]
-        self._task_owner: dict[int, int] = {}
-        self._task_code: dict[int, int] = {}
-        self._task_at: dict[tuple[int, int], int] = {}
-        for t, roles in sym._task_roles.items():
-            owners = [o for o, _ in roles if o in unary]
-            if owners:
-                o = owners[0]
-                c = codes.setdefault(tuple(-1 if x == o else x for x in sym._task_keys[t]),
-                                     len(codes))
-                self._task_owner[t], self._task_code[t] = o, c
-                self._task_at[(c, o)] = t
+        self._task_owner, self._task_code, self._task_at = _owned(
+            sym._task_roles, sym._task_keys, unary, codes)
         self._n = n
         self._sp: dict[int, tuple[int, ...]] = {}
         self._ap: dict[Agenda, tuple[int, ...]] = {}
@@ -187,18 +190,11 @@ class Classer:
                 i = low.bit_length() - 1
                 acc.setdefault(owner[i], []).append(code[i])
                 m ^= low
-            ids = [0] * self._n
-            index, values = self._sprofs, self._sprof_values
-            for o, cs in acc.items():
-                key = tuple(sorted(cs))
-                j = index.get(key)
-                if j is None:
-                    j = index[key] = len(values)
-                    values.append(key)
-                ids[o] = j
+            ids = self._interned({o: tuple(sorted(cs)) for o, cs in acc.items()},
+                                 self._sprofs, self._sprof_values)
             if len(self._sp) >= PROFILE_CACHE:
                 self._sp.clear()
-            r = self._sp[s] = tuple(ids)
+            r = self._sp[s] = ids
         return r
 
     def aprof(self, ag: Agenda) -> tuple[int, ...]:
@@ -210,21 +206,22 @@ class Classer:
             for pos, t in enumerate(ag):
                 if isinstance(t, int) and t in owner:
                     acc.setdefault(owner[t], []).append((pos, code[t]))
-            ids = [0] * self._n
-            index, values = self._aprofs, self._aprof_values
-            for o, ps in acc.items():
-                key = tuple(ps)
-                j = index.get(key)
-                if j is None:
-                    j = index[key] = len(values)
-                    values.append(key)
-                ids[o] = j
+            ids = self._interned({o: tuple(ps) for o, ps in acc.items()},
+                                 self._aprofs, self._aprof_values)
             if len(self._ap) >= PROFILE_CACHE:
                 self._ap.clear()
                 self._plain.clear()
-            r = self._ap[ag] = tuple(ids)
+            r = self._ap[ag] = ids
             self._plain[ag] = not acc
         return r
+
+    def _interned(self, acc: dict[int, Any], index: dict[Any, int], values: list[Any]
+                  ) -> tuple[int, ...]:
+        """Per object, the id in ``index`` (``values``) of its profile in ``acc`` (0: none)."""
+        ids = [0] * self._n
+        for o, key in acc.items():
+            ids[o] = Symmetry._intern(key, index, values)
+        return tuple(ids)
 
     def _atoms(self, o: int, sp: int) -> int:
         """The atoms of state profile ``sp`` at object ``o``, as a mask."""
