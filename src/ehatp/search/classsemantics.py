@@ -4,7 +4,7 @@ as classes"; the representation is :mod:`.worldclasses`).
 A node's worlds are the orbits of its representatives under a group ``G`` of renamings that
 leave the node as it is; every rule commutes with an automorphism of the problem (§3,
 "Symmetry"). Where a rule updates ``W`` world by world, it is applied to the representatives
-alone, by two facts:
+alone, by these facts:
 
 - *The robot's unseen moves* (the product, §4) read ``W`` alone: ``product(G·r)`` is
   ``G·product(r)`` (``product(g·w) = g·product(w)``), so the product of a class is the classes
@@ -13,11 +13,19 @@ alone, by two facts:
   human sees: under the part of ``G`` that fixes ``t`` (``G`` with its cells split where
   ``t`` tells objects apart, :meth:`~.worldclasses.Classer.refine`), which fixes what the
   human sees, a world is kept exactly when its representative is.
+- *The human's action while apart* applies one operator to every world: under the part of
+  ``G`` that fixes the objects it names, which fixes the operator, it is applied to the
+  representatives (:meth:`ClassSemantics.human_exec`).
+- *The human's options while apart* are those certain in every world: when no condition its
+  refinement reads up to its first actions names an atom of an object in a cell, each such
+  condition has one value over a class, so they are read on the representatives' states
+  (:meth:`ClassSemantics._options_blind`).
 
 When no world agrees (a revision, §2), the non-anticipating human's "sees it done" (§4), and at
-every node where a rule reads ``W`` as a whole (the human's options certain in every world,
-speech, the goal), the worlds are listed (:meth:`~.worldclasses.Classer.expand`) and the rules
-of :class:`~.symmetry.SymSemantics` applied as they are: their results are put back into
+every other node where a rule reads ``W`` as a whole (the human's options otherwise, speech,
+the rules while together, the goal), the worlds are listed
+(:meth:`~.worldclasses.Classer.expand`) and the rules of :class:`~.symmetry.SymSemantics`
+applied as they are: their results are put back into
 classes by the canonical form (:meth:`~.worldclasses.ClassSymmetry.canon`). The result is the
 search over listed worlds, node for node: the same canonical renamings, the same policies.
 """
@@ -46,7 +54,7 @@ def _atoms(f: Formula) -> int:
 
 
 PRODUCT_CACHE = 1 << 14
-"""How many sets of classes :meth:`ClassSemantics.product` remembers the products of."""
+"""How many sets of classes :meth:`ClassSemantics._lift_product` remembers the products of."""
 
 
 class ClassSemantics(SymSemantics):
@@ -223,8 +231,10 @@ class ClassSemantics(SymSemantics):
     def _lift_product(self, wc: Worlds) -> Worlds:
         """§4 (the product) on classes: each class's representative's successors, as classes
         under the same cells (the module's docstring)."""
-        if not self.human_model.anticipates or not isinstance(wc, WorldClasses):
-            return self.product(wc) if not isinstance(wc, WorldClasses) else wc
+        if not isinstance(wc, WorldClasses):
+            return self.product(wc)
+        if not self.human_model.anticipates:  # it imagines nothing: W unchanged
+            return wc
         r = self._class_products.get(wc)
         if r is None:
             classer, cells = self.classer, wc.cells
