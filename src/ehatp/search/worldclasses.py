@@ -305,11 +305,6 @@ class Classer:
             size *= n // _FACT[run]
         return size
 
-    def classify(self, w: World, cells: Cells) -> tuple[World, int]:
-        """Return the representative of ``w``'s class under ``cells`` and the class's size."""
-        r = self.canonical(w, cells)
-        return r, self.size(r, cells)
-
     def classes_of(self, worlds: Iterable[World], cells: Cells) -> WorldClasses:
         """Return the classes under ``cells`` of the worlds ``worlds`` (each counted once per
         class: a union of classes is what :meth:`make` is given)."""
@@ -373,7 +368,7 @@ class Classer:
         if not split:
             return wc
         cells = tuple(sorted(new))
-        reps: dict[World, int] = {}
+        worlds: list[World] = []
         for rep in wc:
             sp, ap = self.profiles(rep)
             options = []
@@ -387,9 +382,8 @@ class Classer:
                         for o, q in zip(part, profs, strict=True):
                             if (sp[o], ap[o]) != q:
                                 changes.append((o, q))
-                w, n = self.classify(self.assign(rep, changes) if changes else rep, cells)
-                reps[w] = n
-        out = self.make(reps, cells)
+                worlds.append(self.assign(rep, changes) if changes else rep)
+        out = self.classes_of(worlds, cells)
         assert out.size == wc.size, "a split lost or made worlds"
         return out
 
